@@ -1,0 +1,39 @@
+# Thin wrapper over CMake/ctest. `make run` and `make test` are the README's two commands.
+BUILD ?= build
+JOBS ?= 2
+SCENE ?= inputs/dam_break_2d.yaml
+OUT ?= out/dam_break_2d
+CUDA ?= ON
+PRECISION ?= double
+SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
+
+export OMPI_ALLOW_RUN_AS_ROOT=1
+export OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+export OMPI_MCA_rmaps_base_oversubscribe=1
+
+PACKAGES := build-essential cmake ninja-build pkg-config openmpi-bin libopenmpi-dev \
+  libpetsc-real-dev libhdf5-openmpi-dev libgtest-dev libgmock-dev libyaml-cpp-dev libcli11-dev
+
+.PHONY: deps configure build run test test-unit check clean
+
+deps:
+	@dpkg -s $(PACKAGES) >/dev/null 2>&1 || \
+	  ($(SUDO) apt-get update -q && DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -q $(PACKAGES))
+
+configure: deps
+	cmake -S . -B $(BUILD) -G Ninja -DSPHDEM_ENABLE_CUDA=$(CUDA) -DSPHDEM_PRECISION=$(PRECISION)
+
+build: configure
+	cmake --build $(BUILD) -j $(JOBS)
+
+run: build
+	$(BUILD)/sphdem run $(SCENE) --out $(OUT)
+
+test: build
+	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
+
+test-unit: build
+	cd $(BUILD) && ctest --output-on-failure -j $(JOBS) -L unit
+
+clean:
+	rm -rf $(BUILD)

@@ -1,0 +1,52 @@
+// A run: builds particles from a scene, picks the execution space, steps to the end time,
+// writes diagnostics (CSV), the run log and summary.json, and stops cleanly on a guard.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <ostream>
+#include <string>
+
+#include "scene/build.hpp"
+#include "scene/scene.hpp"
+#include "solver/solver.hpp"
+
+namespace sphdem {
+
+enum class Backend { kAuto, kHost, kDevice };
+Backend parse_backend(const std::string& s);
+
+struct RunOptions {
+  std::string out_dir = "out";
+  Backend backend = Backend::kAuto;
+  std::int64_t max_steps = -1;   // stop after this many steps (bench, tests); -1 = to time.end
+  bool quiet = false;            // no progress lines
+  double progress_every_s = 2.0; // wall seconds between progress lines when not on a TTY
+};
+
+struct RunResult {
+  std::int64_t steps = 0;
+  double sim_time = 0;
+  double wall_seconds = 0;
+  Index fluid = 0, wall = 0, grain = 0;
+  Index removed = 0;
+  double removed_mass = 0;
+  double particle_steps_per_second = 0;
+  bool unstable = false;
+  std::string failure;           // the guard's message when unstable
+  std::string space;             // host or device
+};
+
+// Creates the solver for the backend (auto: the device if a GPU is seen, else the host, and
+// says so in `log`).
+std::unique_ptr<SolverBase> make_solver(const Scene& scene, Backend backend, std::ostream& log,
+                                        BuildReport* report = nullptr);
+
+// Runs the scene. Throws InputError for bad input; a stability guard does not throw: it is
+// reported in RunResult (and the log), with an emergency state file written.
+RunResult run_scene(const Scene& scene, const RunOptions& opt);
+
+// `sphdem check`: counts, memory, dt estimate, steps and cost; prints to `os`.
+void check_scene(const Scene& scene, std::ostream& os);
+
+}  // namespace sphdem

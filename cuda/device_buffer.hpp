@@ -1,0 +1,63 @@
+// Buffer<T, Device>: device memory owned by the host object. Plain C++ (no CUDA headers), so
+// host code can hold device buffers and copy them; only kernels touch their contents.
+#pragma once
+
+#include <cstddef>
+#include <utility>
+#include <vector>
+
+#include "core/exec.hpp"
+#include "cuda/device.hpp"
+
+namespace sphdem {
+
+template <class T>
+class Buffer<T, Device> {
+ public:
+  Buffer() = default;
+  explicit Buffer(std::size_t n) { resize(n); }
+  Buffer(const Buffer&) = delete;
+  Buffer& operator=(const Buffer&) = delete;
+  Buffer(Buffer&& o) noexcept { swap(o); }
+  Buffer& operator=(Buffer&& o) noexcept {
+    swap(o);
+    return *this;
+  }
+  ~Buffer() { cuda::device_free(p_); }
+
+  // Keeps the first min(n, size()) elements.
+  void resize(std::size_t n) {
+    if (n <= cap_) {
+      n_ = n;
+      return;
+    }
+    T* q = static_cast<T*>(cuda::device_alloc(n * sizeof(T)));
+    if (n_ > 0) cuda::copy_device_to_device(q, p_, n_ * sizeof(T));
+    cuda::device_free(p_);
+    p_ = q;
+    n_ = cap_ = n;
+  }
+  std::size_t size() const { return n_; }
+  T* data() { return p_; }
+  const T* data() const { return p_; }
+  void swap(Buffer& o) noexcept {
+    std::swap(p_, o.p_);
+    std::swap(n_, o.n_);
+    std::swap(cap_, o.cap_);
+  }
+
+  void upload(const std::vector<T>& h) {
+    resize(h.size());
+    if (!h.empty()) cuda::copy_to_device(p_, h.data(), h.size() * sizeof(T));
+  }
+  void download(std::vector<T>& h) const {
+    h.resize(n_);
+    if (n_ > 0) cuda::copy_to_host(h.data(), p_, n_ * sizeof(T));
+  }
+
+ private:
+  T* p_ = nullptr;
+  std::size_t n_ = 0, cap_ = 0;
+};
+
+}  // namespace sphdem

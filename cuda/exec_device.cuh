@@ -1,0 +1,70 @@
+// The CUDA execution space: for_each, reduce and the stable key sort for Device.
+// Included only by cuda/*.cu, before the drivers they instantiate. No physics here.
+#pragma once
+
+#include <cuda_runtime.h>
+
+#include <cstdint>
+
+#include "core/exec.hpp"
+#include "cuda/device_buffer.hpp"
+
+namespace sphdem {
+
+namespace detail {
+void check_cuda(cudaError_t e, const char* what);
+
+template <class F>
+__global__ void for_each_kernel(Index n, F f) {
+  const Index i = Index(blockIdx.x) * blockDim.x + threadIdx.x;
+  if (i < n) f(i);
+}
+
+// Each block reduces a fixed chunk of the range in a fixed tree order: deterministic.
+template <class Op, class T, class F>
+__global__ void reduce_kernel(Index n, Index chunk, F f, T* partial) {
+  __shared__ T s[256];
+  const Index lo = Index(blockIdx.x) * chunk;
+  const Index hi = lo + chunk < n ? lo + chunk : n;
+  T acc = Op::template identity<T>();
+  for (Index i = lo + threadIdx.x; i < hi; i += blockDim.x) acc = Op::combine(acc, T(f(i)));
+  s[threadIdx.x] = acc;
+  __syncthreads();
+  for (unsigned w = blockDim.x / 2; w > 0; w /= 2) {
+    if (threadIdx.x < w) s[threadIdx.x] = Op::combine(s[threadIdx.x], s[threadIdx.x + w]);
+    __syncthreads();
+  }
+  if (threadIdx.x == 0) partial[blockIdx.x] = s[0];
+}
+}  // namespace detail
+
+template <class F>
+void for_each(Device, Index n, const F& f) {
+  if (n <= 0) return;
+  constexpr int kBlock = 256;
+  const Index blocks = (n + kBlock - 1) / kBlock;
+  detail::for_each_kernel<<<unsigned(blocks), kBlock>>>(n, f);
+  detail::check_cuda(cudaGetLastError(), "for_each launch");
+}
+
+template <class Op, class T, class F>
+T reduce(Device, Index n, const F& f) {
+  const Index chunk = (n + kReduceChunks - 1) / kReduceChunks;
+  Buffer<T, Device> partial(kReduceChunks);
+  if (n > 0) {
+    detail::reduce_kernel<Op, T><<<unsigned(kReduceChunks), 256>>>(n, chunk, f, partial.data());
+    detail::check_cuda(cudaGetLastError(), "reduce launch");
+  } else {
+    return Op::template identity<T>();
+  }
+  std::vector<T> h;
+  partial.download(h);
+  T acc = Op::template identity<T>();
+  for (const T& v : h) acc = Op::combine(acc, v);
+  return acc;
+}
+
+void sort_pairs_stable(Device, std::uint64_t* keys, std::uint32_t* values, Index n,
+                       std::uint64_t max_key);
+
+}  // namespace sphdem

@@ -1,0 +1,15 @@
+// Device (CUDA) instantiation of the solver: launches only, no physics.
+#include "cuda/exec_device.cuh"
+#include "cuda/particles_device.hpp"
+#include "solver/solver_impl.hpp"
+
+namespace sphdem {
+
+template class Solver<Device>;
+
+std::unique_ptr<SolverBase> make_device_solver(const Scene& scene, ParticleSet<Host> particles,
+                                               Real c0) {
+  return std::make_unique<Solver<Device>>(scene, std::move(particles), c0);
+}
+
+}  // namespace sphdem

@@ -1,0 +1,1006 @@
+// Scene files: YAML, checked against a strict schema, resolved into a Scene (scene/scene.hpp).
+//
+// Layout, with the defaults (keys marked "required" must be present; every other key may be left
+// out and takes the default shown). Ranges are inclusive "[", exclusive "(". 2D runs are in the x-z
+// plane at y = 0: vectors always have three components, and y is ignored where it does not matter.
+//
+//   name: dam_break_2d           # required; letters, digits, '_', '-', '.'
+//   dimension: 2                 # required; 2 or 3
+//   domain:                      # required; particles leaving it are removed
+//     lo: [x, y, z]              # required
+//     hi: [x, y, z]              # required; hi > lo on the used axes (x, z in 2D; 2D: y = 0
+//     inside) periodic: [false, false, false]    # per axis; y cannot be periodic in 2D
+//   gravity: [0, 0, -9.81]       # m/s^2, each component in [-1000, 1000]; also the body force.
+//                                # 2D: the y component must be 0
+//   fluid:
+//     rho0: 1000                 # (0, 1e5] kg/m^3
+//     c0: 0                      # [0, 1e4] m/s; 0 = c0_factor * expected maximum speed
+//     c0_factor: 10              # [1, 100]
+//     gamma: 7                   # [1, 10], Tait exponent
+//     viscosity: {model: laminar, nu: 1e-6, alpha: 0.01}
+//                                # model laminar|artificial; nu [0, 1e3] m^2/s (kinematic);
+//                                # alpha [0, 10] (Monaghan artificial viscosity)
+//     diffusion: {model: fourtakas, delta: 0.1}   # model none|molteni|fourtakas; delta [0, 1]
+//   sph:                         # required
+//     dp: 0.002                  # required; (0, 1] m, initial particle spacing
+//     h_factor: 1.2              # [0.5, 3]; h = h_factor * sqrt(dimension) * dp
+//     boundary: mdbc             # dbc|mdbc
+//     slip: noslip               # noslip|freeslip
+//     boundary_layers: 0         # [0, 20]; 0 = enough layers to fill the kernel support (2h)
+//   time:                        # required
+//     end: 1.0                   # required; (0, 1e6] s
+//     cfl: 0.2                   # (0, 1]
+//     dt_fixed: 0                # [0, 1] s; > 0 = fixed time step (verification only), >= dt_min
+//     dt_min: 1e-9               # [0, 1] s; a step stuck here is a stability fault
+//     integrator: verlet         # verlet|symplectic
+//     verlet_euler_every: 40     # [1, 1e6]
+//   guards:
+//     rho_min_ratio: 0.7         # (0, 1)
+//     rho_max_ratio: 1.3         # (1, 10]
+//     mach_max: 0.1              # (0, 1]
+//     check_every: 1             # [1, 1e6] steps
+//   solids:                      # a list; names are unique
+//     - name: tank               # required
+//       shape: {type: tank, inner_lo: [..], inner_hi: [..], thickness: 0.01}   # required
+//   fluid_blocks:                # a list of boxes filled on the dp lattice, minus the solids
+//     - lo: [x, y, z]            # required; inside the domain
+//       hi: [x, y, z]            # required; hi > lo on the used axes, inside the domain
+//       velocity: [0, 0, 0]      # m/s, components in [-1000, 1000]; 2D: y must be 0
+//       hydrostatic: true        # initial pressure rho0 g (block top - z)
+//   diagnostics:                 # every name below is unique over all diagnostics
+//     every: 0.01                # (0, 1e4] s between CSV rows
+//     pressure_gauges: [{name: p1, point: [x, y, z]}]           # point inside the domain
+//     height_gauges: [{name: h1, x: 0.01, y: 0}]                 # x (required), y inside the
+//     domain fronts: [{name: front, origin: [0, 0, 0], direction: [1, 0, 0]}]   # direction not
+//     zero profiles: [{name: s, from: [..], to: [..], samples: 100, times: [0.1, 0.2]}]
+//                                # from, to required and distinct; samples [2, 1e6];
+//                                # times >= 0 and increasing (times after time.end never happen)
+//     forces: [{name: floor_force, solid: tank}]                 # solid: the name of a solid
+//     energy: true
+//
+// Shapes (key `type`; all keys required unless a default is given; coordinates in [-1e6, 1e6],
+// lengths in (0, 1e6]):
+//   box        {lo, hi}                                hi > lo; 2D: lo.y < 0 < hi.y
+//   plane      {point, normal}                         solid where dot(x - point, normal) < 0
+//   slab       {point, normal, thickness}              |dot(x - point, n)| < thickness / 2
+//   cylinder   {a, b, radius}                          capped, axis from a to b (a != b)
+//   sphere     {center, radius}
+//   tank       {inner_lo, inner_hi, thickness, closed_top: false}
+//                                                      walls around the inner box; 2D: lo.y < 0 <
+//                                                      hi.y
+//   union      {parts: [shape, ...]}                   at least one part
+//   difference {a: shape, b: shape}                    a minus b
+//   transform  {shape, axis: [0, 0, 1], angle_deg: 0, translate: [0, 0, 0]}
+//                                                      x_world = R(axis, angle) x_body + translate
+//   mesh       {file, spacing: sph.dp}                 STL/OBJ, relative to the scene file's folder
+//
+// Errors name the file, the line (1-based) and the dotted key: "<file>:<line>: <key>: <what>".
+// Overrides ("--set key=value") are applied to the tree before validation; an error inside an
+// overridden value names the override instead of the file: "--set <key>=<value>: <key>: <what>".
+#include "io/scene_yaml.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <optional>
+#include <sstream>
+#include <utility>
+
+#include "core/error.hpp"
+#include "geometry/sdf.hpp"
+
+namespace sphdem {
+namespace {
+
+// Shortest readable form: 0.5, 1000, 1e6, 1e-7 (not 1e+06, 1e-07).
+std::string fmt(double v) {
+  std::ostringstream os;
+  os << v;
+  std::string s = os.str();
+  std::size_t e = s.find('e');
+  if (e != std::string::npos) {
+    std::string mant = s.substr(0, e), sign = s[e + 1] == '-' ? "-" : "";
+    std::string digits = s.substr(e + 2);
+    digits.erase(0, std::min(digits.find_first_not_of('0'), digits.size() - 1));
+    s = mant + "e" + sign + digits;
+  }
+  return s;
+}
+
+std::string join(const std::vector<std::string>& items, const char* sep = ", ") {
+  std::string out;
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    if (i > 0) out += sep;
+    out += items[i];
+  }
+  return out;
+}
+
+struct Range {
+  double lo, hi;
+  bool lo_open, hi_open;
+  bool contains(double v) const {
+    return (lo_open ? v > lo : v >= lo) && (hi_open ? v < hi : v <= hi);
+  }
+  std::string str() const {
+    return std::string(lo_open ? "(" : "[") + fmt(lo) + ", " + fmt(hi) + (hi_open ? ")" : "]");
+  }
+};
+constexpr Range closed(double lo, double hi) {
+  return {lo, hi, false, false};
+}
+constexpr Range left_open(double lo, double hi) {
+  return {lo, hi, true, false};
+}
+constexpr Range open_interval(double lo, double hi) {
+  return {lo, hi, true, true};
+}
+
+constexpr double kBig = 1e6;
+constexpr Range kCoord = closed(-kBig, kBig);      // any coordinate
+constexpr Range kLength = left_open(0, kBig);      // a positive length
+constexpr Range kDirection = closed(-kBig, kBig);  // a direction (checked non-zero separately)
+
+const char* const kAxis[3] = {"x", "y", "z"};
+
+std::vector<int> used_axes(int dim) {
+  return dim == 2 ? std::vector<int>{0, 2} : std::vector<int>{0, 1, 2};
+}
+
+// A value in the tree, with the line and dotted key to report.
+struct Field {
+  YAML::Node node;
+  YAML::Mark mark;
+  std::string path;
+};
+
+std::string key_path(const std::string& path, const std::string& key) {
+  return path.empty() ? key : path + "." + key;
+}
+std::string index_path(const std::string& path, std::size_t i) {
+  return path + "[" + std::to_string(i) + "]";
+}
+
+// True when dotted key `path` is `base` or lies inside it ("a.b[2].c" lies inside "a.b").
+bool path_within(const std::string& path, const std::string& base) {
+  if (base.empty() || path.compare(0, base.size(), base) != 0) return false;
+  return path.size() == base.size() || path[base.size()] == '.' || path[base.size()] == '[';
+}
+
+std::string describe(const YAML::Node& n) {
+  switch (n.Type()) {
+    case YAML::NodeType::Scalar:
+      return "'" + n.Scalar() + "'";
+    case YAML::NodeType::Sequence:
+      return "a list";
+    case YAML::NodeType::Map:
+      return "a mapping";
+    default:
+      return "an empty value";
+  }
+}
+
+// A quoted scalar ('0.5', "true") is a string, never a number or a boolean.
+bool is_quoted(const YAML::Node& n) {
+  return n.IsScalar() && n.Tag() == "!";
+}
+
+struct Override {
+  std::string text;  // as given: "sph.dp=0.002"
+  std::string path;  // normalised dotted key: "sph.dp"
+};
+
+template <class E>
+using EnumTable = std::vector<std::pair<std::string, E>>;
+
+const EnumTable<DiffusionModel> kDiffusionModels = {{"none", DiffusionModel::kNone},
+                                                    {"molteni", DiffusionModel::kMolteni},
+                                                    {"fourtakas", DiffusionModel::kFourtakas}};
+const EnumTable<ViscosityModel> kViscosityModels = {{"laminar", ViscosityModel::kLaminar},
+                                                    {"artificial", ViscosityModel::kArtificial}};
+const EnumTable<BoundaryMethod> kBoundaryMethods = {{"dbc", BoundaryMethod::kDbc},
+                                                    {"mdbc", BoundaryMethod::kMdbc}};
+const EnumTable<SlipCondition> kSlipConditions = {{"noslip", SlipCondition::kNoSlip},
+                                                  {"freeslip", SlipCondition::kFreeSlip}};
+const EnumTable<Integrator> kIntegrators = {{"verlet", Integrator::kVerlet},
+                                            {"symplectic", Integrator::kSymplectic}};
+
+enum class ShapeType {
+  kBox,
+  kPlane,
+  kSlab,
+  kCylinder,
+  kSphere,
+  kTank,
+  kUnion,
+  kDifference,
+  kTransform,
+  kMesh
+};
+const EnumTable<ShapeType> kShapeTypes = {{"box", ShapeType::kBox},
+                                          {"plane", ShapeType::kPlane},
+                                          {"slab", ShapeType::kSlab},
+                                          {"cylinder", ShapeType::kCylinder},
+                                          {"sphere", ShapeType::kSphere},
+                                          {"tank", ShapeType::kTank},
+                                          {"union", ShapeType::kUnion},
+                                          {"difference", ShapeType::kDifference},
+                                          {"transform", ShapeType::kTransform},
+                                          {"mesh", ShapeType::kMesh}};
+
+std::vector<std::string> shape_keys(ShapeType t) {
+  switch (t) {
+    case ShapeType::kBox:
+      return {"type", "lo", "hi"};
+    case ShapeType::kPlane:
+      return {"type", "point", "normal"};
+    case ShapeType::kSlab:
+      return {"type", "point", "normal", "thickness"};
+    case ShapeType::kCylinder:
+      return {"type", "a", "b", "radius"};
+    case ShapeType::kSphere:
+      return {"type", "center", "radius"};
+    case ShapeType::kTank:
+      return {"type", "inner_lo", "inner_hi", "thickness", "closed_top"};
+    case ShapeType::kUnion:
+      return {"type", "parts"};
+    case ShapeType::kDifference:
+      return {"type", "a", "b"};
+    case ShapeType::kTransform:
+      return {"type", "shape", "axis", "angle_deg", "translate"};
+    case ShapeType::kMesh:
+      return {"type", "file", "spacing"};
+  }
+  return {};
+}
+
+class Parser;
+
+// One mapping of the tree: its keys are checked against the allowed set on construction.
+class MapReader {
+ public:
+  MapReader(const Parser& parser, const Field& self, const std::vector<std::string>& allowed);
+
+  const Field& self() const { return self_; }
+  std::optional<Field> find(const std::string& key) const {
+    for (const auto& e : entries_) {
+      if (e.first == key) return e.second;
+    }
+    return std::nullopt;
+  }
+  Field require(const std::string& key) const;
+
+  Real number(const std::string& key, const Range& r, Real fallback) const;
+  Real number(const std::string& key, const Range& r) const;
+  int integer(const std::string& key, int lo, int hi, int fallback) const;
+  bool boolean(const std::string& key, bool fallback) const;
+  Vec3 vec3(const std::string& key, const Range& r, Vec3 fallback) const;
+  Vec3 vec3(const std::string& key, const Range& r) const;
+  template <class E>
+  E enumeration(const std::string& key, const EnumTable<E>& table, E fallback) const;
+
+ private:
+  const Parser* parser_;
+  Field self_;
+  std::vector<std::pair<std::string, Field>> entries_;
+};
+
+class Parser {
+ public:
+  Parser(std::string file, std::vector<Override> overrides)
+      : file_(std::move(file)), overrides_(std::move(overrides)) {}
+
+  Scene parse(const YAML::Node& root);
+
+  // ---- errors ----
+  // Where a problem is: the override that produced the value, or the file and line.
+  std::string where(const YAML::Mark& mark, const std::string& path) const {
+    for (auto it = overrides_.rbegin(); it != overrides_.rend(); ++it) {
+      if (path_within(path, it->path)) return "--set " + it->text;
+    }
+    if (mark.line >= 0) return file_ + ":" + std::to_string(mark.line + 1);
+    // A mapping that an override created on its way to its key has no line.
+    for (auto it = overrides_.rbegin(); it != overrides_.rend(); ++it) {
+      if (path_within(it->path, path)) return "--set " + it->text;
+    }
+    return file_;
+  }
+  [[noreturn]] void fail(const YAML::Mark& mark, const std::string& path,
+                         const std::string& what) const {
+    std::string msg = where(mark, path) + ": ";
+    if (!path.empty()) msg += path + ": ";
+    throw InputError(msg + what);
+  }
+  [[noreturn]] void fail(const Field& f, const std::string& what) const {
+    fail(f.mark, f.path, what);
+  }
+  [[noreturn]] void unknown_key(const YAML::Mark& mark, const std::string& path,
+                                const std::vector<std::string>& allowed) const {
+    // An override that put the unknown key there (or something below it) is reported as such.
+    for (auto it = overrides_.rbegin(); it != overrides_.rend(); ++it) {
+      if (path_within(it->path, path)) {
+        throw InputError("--set " + it->text + ": unknown key '" + it->path + "'");
+      }
+    }
+    fail(mark, path, "unknown key; allowed keys: " + join(allowed));
+  }
+
+  // ---- scalar conversions ----
+  double parse_double(const Field& f, const char* expected) const {
+    if (!f.node.IsScalar()) {
+      fail(f, std::string("expected ") + expected + ", got " + describe(f.node));
+    }
+    const std::string& s = f.node.Scalar();
+    if (is_quoted(f.node)) {
+      fail(f, std::string("expected ") + expected + ", got the quoted string '" + s + "'");
+    }
+    bool ok = !s.empty() && s.find_first_not_of("0123456789+-.eE") == std::string::npos;
+    double v = 0;
+    if (ok) {
+      char* end = nullptr;
+      v = std::strtod(s.c_str(), &end);
+      ok = end == s.c_str() + s.size() && std::isfinite(v);
+    }
+    if (!ok) fail(f, std::string("expected ") + expected + ", got '" + s + "'");
+    return v;
+  }
+  Real number(const Field& f, const Range& r) const {
+    double v = parse_double(f, "a number");
+    if (!r.contains(v)) {
+      fail(f, "value " + f.node.Scalar() + " is out of range; allowed " + r.str());
+    }
+    return Real(v);
+  }
+  int integer(const Field& f, int lo, int hi) const {
+    double v = parse_double(f, "an integer");
+    if (v != std::floor(v)) fail(f, "expected an integer, got '" + f.node.Scalar() + "'");
+    if (v < lo || v > hi) {
+      fail(f, "value " + f.node.Scalar() + " is out of range; allowed " + closed(lo, hi).str());
+    }
+    return int(v);
+  }
+  bool boolean(const Field& f) const {
+    if (f.node.IsScalar() && !is_quoted(f.node)) {
+      const std::string& s = f.node.Scalar();
+      if (s == "true" || s == "True" || s == "TRUE") return true;
+      if (s == "false" || s == "False" || s == "FALSE") return false;
+    }
+    fail(f, "expected true or false, got " + describe(f.node));
+  }
+  std::string string(const Field& f) const {
+    if (!f.node.IsScalar()) fail(f, "expected a string, got " + describe(f.node));
+    return f.node.Scalar();
+  }
+  std::string name(const Field& f) const {
+    std::string s = string(f);
+    bool ok = !s.empty() && std::all_of(s.begin(), s.end(), [](char c) {
+      return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.';
+    });
+    if (!ok) fail(f, "'" + s + "' is not a valid name; use letters, digits, '_', '-' and '.'");
+    return s;
+  }
+  template <class E>
+  E enumeration(const Field& f, const EnumTable<E>& table) const {
+    std::vector<std::string> names;
+    for (const auto& e : table) names.push_back(e.first);
+    if (!f.node.IsScalar()) {
+      fail(f, "expected one of " + join(names) + ", got " + describe(f.node));
+    }
+    for (const auto& e : table) {
+      if (e.first == f.node.Scalar()) return e.second;
+    }
+    fail(f, "'" + f.node.Scalar() + "' is not one of " + join(names));
+  }
+
+  // ---- lists ----
+  std::vector<Field> list(const Field& f) const {
+    if (!f.node.IsSequence()) fail(f, "expected a list, got " + describe(f.node));
+    std::vector<Field> out;
+    for (std::size_t i = 0; i < f.node.size(); ++i) {
+      YAML::Node e = f.node[i];
+      YAML::Mark m = e.Mark();
+      if (m.line < 0 || e.IsNull()) m = f.mark;
+      out.push_back(Field{e, m, index_path(f.path, i)});
+    }
+    return out;
+  }
+  std::vector<Field> fixed_list(const Field& f, std::size_t n, const char* what) const {
+    if (!f.node.IsSequence()) {
+      fail(f, "expected a list of " + std::to_string(n) + " " + what + ", got " + describe(f.node));
+    }
+    if (f.node.size() != n) {
+      fail(f, "expected a list of " + std::to_string(n) + " " + what + ", got a list of " +
+                  std::to_string(f.node.size()));
+    }
+    return list(f);
+  }
+  Vec3 vec3(const Field& f, const Range& r) const {
+    std::vector<Field> items = fixed_list(f, 3, "numbers");
+    return Vec3(number(items[0], r), number(items[1], r), number(items[2], r));
+  }
+  MapReader map(const Field& f, const std::vector<std::string>& allowed) const {
+    return MapReader(*this, f, allowed);
+  }
+
+ private:
+  // ---- checks shared by several sections ----
+  void check_planar(const Field& f, const Vec3& v) const {
+    if (dim_ == 2 && v.y != 0) {
+      fail(f, "the y component must be 0 in 2D (runs are in the x-z plane)");
+    }
+  }
+  void check_above(const Field& f_hi, const Vec3& lo, const Vec3& hi,
+                   const std::vector<int>& axes) const {
+    for (int a : axes) {
+      if (!(hi[a] > lo[a])) {
+        fail(f_hi, std::string("hi.") + kAxis[a] + " = " + fmt(hi[a]) +
+                       " must be greater than lo." + kAxis[a] + " = " + fmt(lo[a]));
+      }
+    }
+  }
+  void check_spans_y0(const Field& f, const Vec3& lo, const Vec3& hi, const char* what) const {
+    if (dim_ == 2 && !(lo.y < 0 && 0 < hi.y)) {
+      fail(f, std::string("in 2D ") + what +
+                  " must span y = 0 (lo.y < 0 < hi.y); runs are in the x-z plane");
+    }
+  }
+  void check_in_domain(const Field& f, Real v, int axis, const std::string& label) const {
+    if (v < scene_->domain_lo[axis] || v > scene_->domain_hi[axis]) {
+      fail(f, label + kAxis[axis] + " = " + fmt(v) + " is outside the domain (" + kAxis[axis] +
+                  " from " + fmt(scene_->domain_lo[axis]) + " to " + fmt(scene_->domain_hi[axis]) +
+                  ")");
+    }
+  }
+  void check_in_domain(const Field& f, const Vec3& p, const std::string& label) const {
+    for (int a : used_axes(dim_)) check_in_domain(f, p[a], a, label);
+  }
+  void check_nonzero(const Field& f, const Vec3& v) const {
+    if (norm2(v) == 0) fail(f, "must not be the zero vector");
+  }
+
+  // ---- sections ----
+  void parse_domain(const Field& f);
+  void parse_fluid(const Field& f);
+  void parse_sph(const Field& f);
+  void parse_time(const Field& f);
+  void parse_guards(const Field& f);
+  void parse_solids(const Field& f);
+  void parse_fluid_blocks(const Field& f);
+  void parse_diagnostics(const Field& f);
+  geom::SdfPtr parse_shape(const Field& f) const;
+  std::string diagnostic_name(const MapReader& m);
+
+  std::string file_;
+  std::vector<Override> overrides_;
+  Scene* scene_ = nullptr;
+  int dim_ = 2;
+  std::map<std::string, std::string> diagnostic_names_;  // name -> where it was first used
+};
+
+// ---- MapReader ------------------------------------------------------------------------------
+
+MapReader::MapReader(const Parser& parser, const Field& self,
+                     const std::vector<std::string>& allowed)
+    : parser_(&parser), self_(self) {
+  if (!self.node.IsMap()) parser.fail(self, "expected a mapping, got " + describe(self.node));
+  for (auto it = self.node.begin(); it != self.node.end(); ++it) {
+    const YAML::Node& k = it->first;
+    if (!k.IsScalar()) {
+      parser.fail(k.Mark(), self.path, "keys must be plain names, got " + describe(k));
+    }
+    const std::string key = k.Scalar();
+    const std::string path = key_path(self.path, key);
+    if (std::find(allowed.begin(), allowed.end(), key) == allowed.end()) {
+      parser.unknown_key(k.Mark(), path, allowed);
+    }
+    if (find(key)) parser.fail(k.Mark(), path, "duplicate key");
+    // Values are reported at their key's line (a null value's own mark is the next token's).
+    YAML::Mark mark = k.Mark().line >= 0 ? k.Mark() : it->second.Mark();
+    entries_.emplace_back(key, Field{it->second, mark, path});
+  }
+}
+
+Field MapReader::require(const std::string& key) const {
+  auto f = find(key);
+  if (!f) parser_->fail(self_.mark, key_path(self_.path, key), "required key is missing");
+  return *f;
+}
+Real MapReader::number(const std::string& key, const Range& r, Real fallback) const {
+  auto f = find(key);
+  return f ? parser_->number(*f, r) : fallback;
+}
+Real MapReader::number(const std::string& key, const Range& r) const {
+  return parser_->number(require(key), r);
+}
+int MapReader::integer(const std::string& key, int lo, int hi, int fallback) const {
+  auto f = find(key);
+  return f ? parser_->integer(*f, lo, hi) : fallback;
+}
+bool MapReader::boolean(const std::string& key, bool fallback) const {
+  auto f = find(key);
+  return f ? parser_->boolean(*f) : fallback;
+}
+Vec3 MapReader::vec3(const std::string& key, const Range& r, Vec3 fallback) const {
+  auto f = find(key);
+  return f ? parser_->vec3(*f, r) : fallback;
+}
+Vec3 MapReader::vec3(const std::string& key, const Range& r) const {
+  return parser_->vec3(require(key), r);
+}
+template <class E>
+E MapReader::enumeration(const std::string& key, const EnumTable<E>& table, E fallback) const {
+  auto f = find(key);
+  return f ? parser_->enumeration(*f, table) : fallback;
+}
+
+// ---- sections -------------------------------------------------------------------------------
+
+Scene Parser::parse(const YAML::Node& root) {
+  Scene s;
+  s.source = file_;  // also the base folder of mesh paths
+  scene_ = &s;
+  MapReader top = map(Field{root, root.Mark(), ""},
+                      {"name", "dimension", "domain", "gravity", "fluid", "sph", "time", "guards",
+                       "solids", "fluid_blocks", "diagnostics"});
+  s.name = name(top.require("name"));
+  s.dim = dim_ = integer(top.require("dimension"), 2, 3);
+  parse_domain(top.require("domain"));
+  if (auto f = top.find("gravity")) {
+    s.gravity = vec3(*f, closed(-1e3, 1e3));
+    check_planar(*f, s.gravity);
+  }
+  if (auto f = top.find("fluid")) parse_fluid(*f);
+  parse_sph(top.require("sph"));
+  parse_time(top.require("time"));
+  if (auto f = top.find("guards")) parse_guards(*f);
+  if (auto f = top.find("solids")) parse_solids(*f);
+  if (auto f = top.find("fluid_blocks")) parse_fluid_blocks(*f);
+  if (auto f = top.find("diagnostics")) parse_diagnostics(*f);
+  scene_ = nullptr;
+  return s;
+}
+
+void Parser::parse_domain(const Field& f) {
+  MapReader m = map(f, {"lo", "hi", "periodic"});
+  Field f_lo = m.require("lo");
+  Field f_hi = m.require("hi");
+  scene_->domain_lo = vec3(f_lo, kCoord);
+  scene_->domain_hi = vec3(f_hi, kCoord);
+  if (auto p = m.find("periodic")) {
+    std::vector<Field> items = fixed_list(*p, 3, "booleans");
+    for (int a = 0; a < 3; ++a) scene_->periodic[a] = boolean(items[a]);
+    if (dim_ == 2 && scene_->periodic[1]) fail(items[1], "y cannot be periodic in 2D");
+  }
+  check_above(f_hi, scene_->domain_lo, scene_->domain_hi, used_axes(dim_));
+  if (dim_ == 2 && !(scene_->domain_lo.y <= 0 && 0 <= scene_->domain_hi.y)) {
+    fail(f_hi, "in 2D the domain must contain y = 0 (lo.y <= 0 <= hi.y)");
+  }
+}
+
+void Parser::parse_fluid(const Field& f) {
+  FluidParams& p = scene_->fluid;
+  MapReader m = map(f, {"rho0", "c0", "c0_factor", "gamma", "viscosity", "diffusion"});
+  p.rho0 = m.number("rho0", left_open(0, 1e5), p.rho0);
+  p.c0 = m.number("c0", closed(0, 1e4), p.c0);
+  p.c0_factor = m.number("c0_factor", closed(1, 100), p.c0_factor);
+  p.gamma = m.number("gamma", closed(1, 10), p.gamma);
+  if (auto v = m.find("viscosity")) {
+    MapReader vm = map(*v, {"model", "nu", "alpha"});
+    p.viscosity = vm.enumeration("model", kViscosityModels, p.viscosity);
+    p.nu = vm.number("nu", closed(0, 1e3), p.nu);
+    p.alpha = vm.number("alpha", closed(0, 10), p.alpha);
+  }
+  if (auto d = m.find("diffusion")) {
+    MapReader dm = map(*d, {"model", "delta"});
+    p.diffusion = dm.enumeration("model", kDiffusionModels, p.diffusion);
+    p.delta = dm.number("delta", closed(0, 1), p.delta);
+  }
+}
+
+void Parser::parse_sph(const Field& f) {
+  SphParams& p = scene_->sph;
+  MapReader m = map(f, {"dp", "h_factor", "boundary", "slip", "boundary_layers"});
+  p.dp = m.number("dp", left_open(0, 1));
+  p.h_factor = m.number("h_factor", closed(0.5, 3), p.h_factor);
+  p.boundary = m.enumeration("boundary", kBoundaryMethods, p.boundary);
+  p.slip = m.enumeration("slip", kSlipConditions, p.slip);
+  p.boundary_layers = m.integer("boundary_layers", 0, 20, p.boundary_layers);
+}
+
+void Parser::parse_time(const Field& f) {
+  TimeParams& p = scene_->time;
+  MapReader m = map(f, {"end", "cfl", "dt_fixed", "dt_min", "integrator", "verlet_euler_every"});
+  p.end = m.number("end", left_open(0, 1e6));
+  p.cfl = m.number("cfl", left_open(0, 1), p.cfl);
+  p.dt_fixed = m.number("dt_fixed", closed(0, 1), p.dt_fixed);
+  p.dt_min = m.number("dt_min", closed(0, 1), p.dt_min);
+  p.integrator = m.enumeration("integrator", kIntegrators, p.integrator);
+  p.verlet_euler_every = m.integer("verlet_euler_every", 1, 1000000, p.verlet_euler_every);
+  if (p.dt_fixed > 0 && p.dt_fixed < p.dt_min) {
+    fail(*m.find("dt_fixed"), fmt(p.dt_fixed) + " is below time.dt_min = " + fmt(p.dt_min));
+  }
+}
+
+void Parser::parse_guards(const Field& f) {
+  GuardParams& p = scene_->guards;
+  MapReader m = map(f, {"rho_min_ratio", "rho_max_ratio", "mach_max", "check_every"});
+  p.rho_min_ratio = m.number("rho_min_ratio", open_interval(0, 1), p.rho_min_ratio);
+  p.rho_max_ratio = m.number("rho_max_ratio", left_open(1, 10), p.rho_max_ratio);
+  p.mach_max = m.number("mach_max", left_open(0, 1), p.mach_max);
+  p.check_every = m.integer("check_every", 1, 1000000, p.check_every);
+}
+
+void Parser::parse_solids(const Field& f) {
+  std::map<std::string, std::string> seen;
+  for (const Field& item : list(f)) {
+    MapReader m = map(item, {"name", "shape"});
+    Field f_name = m.require("name");
+    Solid solid;
+    solid.name = name(f_name);
+    auto [it, fresh] = seen.emplace(solid.name, f_name.path);
+    if (!fresh) fail(f_name, "duplicate solid name '" + solid.name + "' (also " + it->second + ")");
+    solid.sdf = parse_shape(m.require("shape"));
+    scene_->solids.push_back(std::move(solid));
+  }
+}
+
+geom::SdfPtr Parser::parse_shape(const Field& f) const {
+  if (!f.node.IsMap()) fail(f, "expected a mapping with a 'type' key, got " + describe(f.node));
+  // The allowed keys depend on the type, so read it first.
+  std::optional<Field> f_type;
+  for (auto it = f.node.begin(); it != f.node.end(); ++it) {
+    if (it->first.IsScalar() && it->first.Scalar() == "type") {
+      f_type = Field{it->second, it->first.Mark(), key_path(f.path, "type")};
+      break;
+    }
+  }
+  if (!f_type) fail(f.mark, key_path(f.path, "type"), "required key is missing");
+  const ShapeType type = enumeration(*f_type, kShapeTypes);
+  MapReader m = map(f, shape_keys(type));
+
+  switch (type) {
+    case ShapeType::kBox: {
+      Vec3 lo = m.vec3("lo", kCoord);
+      Field f_hi = m.require("hi");
+      Vec3 hi = vec3(f_hi, kCoord);
+      check_above(f_hi, lo, hi, {0, 1, 2});
+      check_spans_y0(f_hi, lo, hi, "a box");
+      return geom::make_box(lo, hi);
+    }
+    case ShapeType::kPlane: {
+      Vec3 point = m.vec3("point", kCoord);
+      Field f_n = m.require("normal");
+      Vec3 n = vec3(f_n, kDirection);
+      check_nonzero(f_n, n);
+      return geom::make_plane(point, n);
+    }
+    case ShapeType::kSlab: {
+      Vec3 point = m.vec3("point", kCoord);
+      Field f_n = m.require("normal");
+      Vec3 n = vec3(f_n, kDirection);
+      check_nonzero(f_n, n);
+      return geom::make_slab(point, n, m.number("thickness", kLength));
+    }
+    case ShapeType::kCylinder: {
+      Vec3 a = m.vec3("a", kCoord);
+      Field f_b = m.require("b");
+      Vec3 b = vec3(f_b, kCoord);
+      if (norm2(b - a) == 0) fail(f_b, "must differ from a (the axis has zero length)");
+      return geom::make_cylinder(a, b, m.number("radius", kLength));
+    }
+    case ShapeType::kSphere: {
+      Vec3 c = m.vec3("center", kCoord);
+      return geom::make_sphere(c, m.number("radius", kLength));
+    }
+    case ShapeType::kTank: {
+      Vec3 lo = m.vec3("inner_lo", kCoord);
+      Field f_hi = m.require("inner_hi");
+      Vec3 hi = vec3(f_hi, kCoord);
+      check_above(f_hi, lo, hi, {0, 1, 2});
+      check_spans_y0(f_hi, lo, hi, "a tank");
+      Real t = m.number("thickness", kLength);
+      return geom::make_tank(lo, hi, t, m.boolean("closed_top", false));
+    }
+    case ShapeType::kUnion: {
+      Field f_parts = m.require("parts");
+      std::vector<Field> items = list(f_parts);
+      if (items.empty()) fail(f_parts, "expected at least one part");
+      std::vector<geom::SdfPtr> parts;
+      for (const Field& item : items) parts.push_back(parse_shape(item));
+      return geom::make_union(std::move(parts));
+    }
+    case ShapeType::kDifference: {
+      geom::SdfPtr a = parse_shape(m.require("a"));
+      geom::SdfPtr b = parse_shape(m.require("b"));
+      return geom::make_difference(std::move(a), std::move(b));
+    }
+    case ShapeType::kTransform: {
+      geom::SdfPtr body = parse_shape(m.require("shape"));
+      Vec3 axis(0, 0, 1);
+      if (auto f_axis = m.find("axis")) {
+        axis = vec3(*f_axis, kDirection);
+        check_nonzero(*f_axis, axis);
+      }
+      Real angle = m.number("angle_deg", closed(-360, 360), 0);
+      Vec3 t = m.vec3("translate", kCoord, Vec3());
+      return geom::make_transform(std::move(body), axis, angle * kPi / 180, t);
+    }
+    case ShapeType::kMesh: {
+      Field f_file = m.require("file");
+      std::string file = string(f_file);
+      if (file.empty()) fail(f_file, "expected a file name, got an empty string");
+      Real spacing = m.number("spacing", kLength, scene_->sph.dp);
+      namespace fs = std::filesystem;
+      fs::path path(file);
+      if (path.is_relative()) path = fs::path(scene_->source).parent_path() / path;
+      const std::string resolved = path.string();
+      if (!std::ifstream(resolved)) fail(f_file, "cannot open mesh file '" + resolved + "'");
+      try {
+        return geom::make_mesh_sdf(geom::load_mesh(resolved), spacing);
+      } catch (const std::exception& e) {
+        fail(f_file, e.what());
+      }
+    }
+  }
+  fail(f, "unhandled shape type");  // not reached: the enumeration covers every type
+}
+
+void Parser::parse_fluid_blocks(const Field& f) {
+  for (const Field& item : list(f)) {
+    MapReader m = map(item, {"lo", "hi", "velocity", "hydrostatic"});
+    FluidBlock b;
+    Field f_lo = m.require("lo");
+    Field f_hi = m.require("hi");
+    b.lo = vec3(f_lo, kCoord);
+    b.hi = vec3(f_hi, kCoord);
+    check_above(f_hi, b.lo, b.hi, used_axes(dim_));
+    check_in_domain(f_lo, b.lo, "lo.");
+    check_in_domain(f_hi, b.hi, "hi.");
+    if (auto f_v = m.find("velocity")) {
+      b.velocity = vec3(*f_v, closed(-1e3, 1e3));
+      check_planar(*f_v, b.velocity);
+    }
+    b.hydrostatic = m.boolean("hydrostatic", b.hydrostatic);
+    scene_->fluid_blocks.push_back(b);
+  }
+}
+
+std::string Parser::diagnostic_name(const MapReader& m) {
+  Field f = m.require("name");
+  std::string n = name(f);
+  auto [it, fresh] = diagnostic_names_.emplace(n, f.path);
+  if (!fresh) fail(f, "duplicate diagnostic name '" + n + "' (also " + it->second + ")");
+  return n;
+}
+
+void Parser::parse_diagnostics(const Field& f) {
+  Diagnostics& d = scene_->diagnostics;
+  MapReader m = map(
+      f, {"every", "pressure_gauges", "height_gauges", "fronts", "profiles", "forces", "energy"});
+  d.every = m.number("every", left_open(0, 1e4), d.every);
+  if (auto l = m.find("pressure_gauges")) {
+    for (const Field& item : list(*l)) {
+      MapReader g = map(item, {"name", "point"});
+      PressureGauge pg;
+      pg.name = diagnostic_name(g);
+      Field f_p = g.require("point");
+      pg.point = vec3(f_p, kCoord);
+      check_in_domain(f_p, pg.point, "");
+      d.pressure_gauges.push_back(pg);
+    }
+  }
+  if (auto l = m.find("height_gauges")) {
+    for (const Field& item : list(*l)) {
+      MapReader g = map(item, {"name", "x", "y"});
+      HeightGauge hg;
+      hg.name = diagnostic_name(g);
+      Field f_x = g.require("x");
+      hg.x = number(f_x, kCoord);
+      check_in_domain(f_x, hg.x, 0, "");
+      if (auto f_y = g.find("y")) {
+        hg.y = number(*f_y, kCoord);
+        if (dim_ == 3) check_in_domain(*f_y, hg.y, 1, "");
+      }
+      d.height_gauges.push_back(hg);
+    }
+  }
+  if (auto l = m.find("fronts")) {
+    for (const Field& item : list(*l)) {
+      MapReader g = map(item, {"name", "origin", "direction"});
+      FrontTracker ft;
+      ft.name = diagnostic_name(g);
+      ft.origin = g.vec3("origin", kCoord, ft.origin);
+      if (auto f_d = g.find("direction")) {
+        ft.direction = vec3(*f_d, kDirection);
+        check_nonzero(*f_d, ft.direction);
+      }
+      d.fronts.push_back(ft);
+    }
+  }
+  if (auto l = m.find("profiles")) {
+    for (const Field& item : list(*l)) {
+      MapReader g = map(item, {"name", "from", "to", "samples", "times"});
+      ProfileSpec ps;
+      ps.name = diagnostic_name(g);
+      ps.from = g.vec3("from", kCoord);
+      Field f_to = g.require("to");
+      ps.to = vec3(f_to, kCoord);
+      if (norm2(ps.to - ps.from) == 0) fail(f_to, "must differ from 'from'");
+      ps.samples = g.integer("samples", 2, 1000000, ps.samples);
+      if (auto f_t = g.find("times")) {
+        for (const Field& t : list(*f_t)) {
+          Real v = number(t, closed(0, 1e6));
+          if (!ps.times.empty() && !(v > ps.times.back())) {
+            fail(t, "times must be increasing; " + t.node.Scalar() + " follows " +
+                        fmt(ps.times.back()));
+          }
+          ps.times.push_back(v);
+        }
+      }
+      d.profiles.push_back(ps);
+    }
+  }
+  if (auto l = m.find("forces")) {
+    for (const Field& item : list(*l)) {
+      MapReader g = map(item, {"name", "solid"});
+      ForceProbe fp;
+      fp.name = diagnostic_name(g);
+      Field f_s = g.require("solid");
+      fp.solid = string(f_s);
+      if (!scene_->find_solid(fp.solid)) {
+        std::vector<std::string> names;
+        for (const Solid& s : scene_->solids) names.push_back(s.name);
+        fail(f_s, "no solid named '" + fp.solid + "'; " +
+                      (names.empty() ? std::string("the scene has no solids")
+                                     : "solids are: " + join(names)));
+      }
+      d.forces.push_back(fp);
+    }
+  }
+  d.energy = m.boolean("energy", d.energy);
+}
+
+// ---- overrides ------------------------------------------------------------------------------
+
+struct KeySegment {
+  std::string key;  // a mapping key, or
+  long index = -1;  // a list index (>= 0)
+};
+
+// "solids[0].shape.thickness" -> solids, [0], shape, thickness. Empty on a malformed key.
+std::vector<KeySegment> split_key(const std::string& key) {
+  std::vector<KeySegment> out;
+  std::size_t i = 0;
+  auto is_name_char = [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-';
+  };
+  while (true) {
+    std::size_t start = i;
+    while (i < key.size() && is_name_char(key[i])) ++i;
+    if (i == start) return {};
+    out.push_back({key.substr(start, i - start), -1});
+    while (i < key.size() && key[i] == '[') {
+      std::size_t close = key.find(']', i);
+      if (close == std::string::npos || close == i + 1) return {};
+      std::string digits = key.substr(i + 1, close - i - 1);
+      if (digits.find_first_not_of("0123456789") != std::string::npos || digits.size() > 9) {
+        return {};
+      }
+      out.push_back({"", std::stol(digits)});
+      i = close + 1;
+    }
+    if (i == key.size()) return out;
+    if (key[i] != '.') return {};
+    ++i;
+  }
+}
+
+std::string trim(const std::string& s) {
+  const char* ws = " \t\r\n";
+  std::size_t a = s.find_first_not_of(ws);
+  if (a == std::string::npos) return "";
+  return s.substr(a, s.find_last_not_of(ws) - a + 1);
+}
+
+// Applies "key=value" to the tree; returns the normalised key.
+Override apply_override(YAML::Node& root, const std::string& text) {
+  const std::string where = "--set " + text + ": ";
+  std::size_t eq = text.find('=');
+  if (eq == std::string::npos) throw InputError(where + "expected key=value");
+  const std::string key = trim(text.substr(0, eq));
+  std::vector<KeySegment> segs = split_key(key);
+  if (segs.empty()) {
+    throw InputError(where + "malformed key '" + key + "'; expected e.g. sph.dp or solids[0].name");
+  }
+  YAML::Node value;
+  try {
+    value = YAML::Load(text.substr(eq + 1));
+  } catch (const YAML::ParserException& e) {
+    throw InputError(where + "YAML syntax error: " + e.msg);
+  }
+
+  YAML::Node cur = root;
+  std::string so_far;
+  for (std::size_t i = 0; i < segs.size(); ++i) {
+    const KeySegment& s = segs[i];
+    const bool last = i + 1 == segs.size();
+    if (s.index < 0) {
+      if (!cur.IsMap() && !cur.IsNull())
+        throw InputError(where + "'" + so_far + "' is not a mapping");
+      so_far = key_path(so_far, s.key);
+      if (last) {
+        cur[s.key] = value;
+      } else {
+        YAML::Node next = cur[s.key];
+        if (!next.IsDefined()) next = YAML::Node(YAML::NodeType::Map);
+        cur.reset(next);
+      }
+    } else {
+      const std::size_t idx = static_cast<std::size_t>(s.index);
+      if (!cur.IsSequence()) throw InputError(where + "'" + so_far + "' is not a list");
+      if (idx >= cur.size()) {
+        throw InputError(where + "'" + so_far + "' has no entry [" + std::to_string(idx) + "]");
+      }
+      so_far = index_path(so_far, idx);
+      if (last) {
+        cur[idx] = value;
+      } else {
+        cur.reset(cur[idx]);
+      }
+    }
+  }
+  return Override{text, so_far};
+}
+
+}  // namespace
+
+Scene parse_scene(const std::string& yaml_text, const std::string& source_name,
+                  const std::vector<std::string>& overrides) {
+  std::vector<YAML::Node> docs;
+  try {
+    docs = YAML::LoadAll(yaml_text);
+  } catch (const YAML::ParserException& e) {
+    std::string line = e.mark.line >= 0 ? ":" + std::to_string(e.mark.line + 1) : "";
+    throw InputError(source_name + line + ": YAML syntax error: " + e.msg);
+  }
+  if (docs.size() > 1) {
+    std::string line = docs[1].Mark().line >= 0 ? std::to_string(docs[1].Mark().line + 1) : "1";
+    throw InputError(source_name + ":" + line + ": a scene file holds one YAML document");
+  }
+  YAML::Node root = docs.empty() ? YAML::Node() : docs[0];
+  if (root.IsNull() || !root.IsDefined()) {
+    throw InputError(source_name +
+                     ":1: the scene is empty; it needs at least name, dimension, domain, sph.dp "
+                     "and time.end");
+  }
+  if (!root.IsMap()) {
+    throw InputError(source_name + ":" + std::to_string(root.Mark().line + 1) +
+                     ": expected a mapping of scene keys at the top level, got " + describe(root));
+  }
+
+  std::vector<Override> applied;
+  for (const std::string& o : overrides) applied.push_back(apply_override(root, o));
+
+  Parser parser(source_name, applied);
+  Scene parsed = parser.parse(root);
+  YAML::Emitter emitter;
+  emitter << root;
+  parsed.yaml_text = std::string(emitter.c_str()) + "\n";
+  return parsed;
+}
+
+Scene load_scene(const std::string& path, const std::vector<std::string>& overrides) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError("cannot open scene file '" + path + "'");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parse_scene(text.str(), path, overrides);
+}
+
+}  // namespace sphdem

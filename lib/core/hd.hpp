@@ -1,0 +1,12 @@
+// SPHDEM_HD marks functions compiled for both the host and the device.
+// Physics lives in SPHDEM_HD inline functions of plain values; the CPU backend calls them from an
+// OpenMP loop and the CUDA backend from a kernel. See DESIGN.md §3.
+#pragma once
+
+#if defined(__CUDACC__)
+#define SPHDEM_HD __host__ __device__
+#define SPHDEM_LAMBDA [=] __host__ __device__
+#else
+#define SPHDEM_HD
+#define SPHDEM_LAMBDA [=]
+#endif

@@ -1,0 +1,91 @@
+#include "diagnostics/guards.hpp"
+
+#include <cmath>
+#include <sstream>
+
+#include "core/error.hpp"
+
+namespace sphdem {
+
+namespace {
+[[noreturn]] void fail(const std::string& cause, Real time, std::int64_t step,
+                       const std::string& detail, const std::string& hint) {
+  std::ostringstream os;
+  os << "unstable: " << cause << " at t = " << time << " s (step " << step << "): " << detail;
+  if (!hint.empty()) os << ". " << hint;
+  throw StabilityError(os.str());
+}
+bool finite(const Vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+}  // namespace
+
+void check_step_guards(const Scene& scene, const StepParams& p, const StepStats& st, Real time,
+                       std::int64_t step) {
+  if (!std::isfinite(st.dt) || !std::isfinite(st.max_speed) || !std::isfinite(st.rho_min) ||
+      !std::isfinite(st.rho_max)) {
+    std::ostringstream d;
+    d << "dt = " << st.dt << ", max speed = " << st.max_speed << ", density range [" << st.rho_min
+      << ", " << st.rho_max << "]";
+    fail("NaN or Inf", time, step, d.str(), "The step diverged; lower time.cfl");
+  }
+  if (scene.time.dt_fixed <= 0 && st.dt < scene.time.dt_min) {
+    std::ostringstream d;
+    d << "dt = " << st.dt << " s fell below the floor time.dt_min = " << scene.time.dt_min
+      << " s (force limit " << st.dt_force << " s, acoustic limit " << st.dt_acoustic
+      << " s, viscous limit " << st.dt_viscous << " s)";
+    fail("time step at its floor", time, step, d.str(), "Accelerations are growing without bound");
+  }
+  const Real mach = st.max_speed / p.eos.c0;
+  if (mach > scene.guards.mach_max) {
+    std::ostringstream d;
+    d << "max speed " << st.max_speed << " m/s is Mach " << mach << " of c0 = " << p.eos.c0
+      << " m/s, above guards.mach_max = " << scene.guards.mach_max;
+    fail("Mach number too high", time, step, d.str(),
+         "Raise fluid.c0 (or fluid.c0_factor) so the fluid stays weakly compressible");
+  }
+  const Real lo = scene.guards.rho_min_ratio * p.eos.rho0, hi = scene.guards.rho_max_ratio * p.eos.rho0;
+  if (st.rho_min < lo || st.rho_max > hi) {
+    std::ostringstream d;
+    d << "fluid density range [" << st.rho_min << ", " << st.rho_max << "] kg/m^3 leaves ["
+      << lo << ", " << hi << "] (guards.rho_min_ratio/rho_max_ratio times rho0)";
+    fail("density out of bounds", time, step, d.str(),
+         "Check density diffusion (fluid.diffusion), the CFL number and c0");
+  }
+}
+
+void check_particle_guards(const Scene& scene, const StepParams& p, const ParticleSet<Host>& ps,
+                           Real time, std::int64_t step) {
+  const Real lo = scene.guards.rho_min_ratio * p.eos.rho0, hi = scene.guards.rho_max_ratio * p.eos.rho0;
+  for (Index i = 0; i < ps.n_fluid; ++i) {
+    if (!finite(ps.pos[i]) || !finite(ps.vel[i]) || !std::isfinite(ps.rho[i])) {
+      std::ostringstream d;
+      d << "fluid particle id " << ps.id[i] << " has position (" << ps.pos[i].x << ", "
+        << ps.pos[i].y << ", " << ps.pos[i].z << "), density " << ps.rho[i];
+      fail("NaN or Inf", time, step, d.str(), "The step diverged; lower time.cfl");
+    }
+    if (ps.rho[i] < lo || ps.rho[i] > hi) {
+      std::ostringstream d;
+      d << "fluid particle id " << ps.id[i] << " has density " << ps.rho[i]
+        << " kg/m^3, outside [" << lo << ", " << hi << "]";
+      fail("density out of bounds", time, step, d.str(),
+           "Check density diffusion (fluid.diffusion), the CFL number and c0");
+    }
+  }
+  // Penetration: a fluid particle deeper than dp/2 inside a solid has crossed the wall (the
+  // first fluid layer sits at phi = +dp/2, the first boundary layer at -dp/2).
+  const Real tol = Real(0.5) * p.dp;
+  for (Index i = 0; i < ps.n_fluid; ++i) {
+    for (const Solid& s : scene.solids) {
+      const Real phi = s.sdf->phi(ps.pos[i]);
+      if (phi < -tol) {
+        std::ostringstream d;
+        d << "fluid particle id " << ps.id[i] << " is " << -phi << " m inside solid '" << s.name
+          << "' at (" << ps.pos[i].x << ", " << ps.pos[i].y << ", " << ps.pos[i].z << ")";
+        fail("fluid inside a solid", time, step, d.str(),
+             "The wall is too thin for the kernel or the step too large; add boundary layers or "
+             "lower time.cfl");
+      }
+    }
+  }
+}
+
+}  // namespace sphdem

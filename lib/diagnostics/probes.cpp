@@ -1,0 +1,77 @@
+#include "diagnostics/probes.hpp"
+
+#include <cmath>
+#include <limits>
+
+#include "sph/kernel.hpp"
+
+namespace sphdem {
+
+Real probe_pressure(const ParticleSet<Host>& ps, const StepParams& p, const Vec3& point) {
+  Real num = 0, den = 0;
+  for (Index j = 0; j < ps.n_fluid; ++j) {
+    const Vec3 d = p.grid.separation(point, ps.pos[j]);
+    const Real r2 = norm2(d);
+    if (r2 >= p.radius2) continue;
+    const Real w = kernel_w(p.kernel, std::sqrt(r2)) * ps.mass[j] / ps.rho[j];
+    num += ps.press[j] * w;
+    den += w;
+  }
+  return den > 0 ? num / den : Real(0);
+}
+
+Real probe_surface_height(const ParticleSet<Host>& ps, const StepParams& p, Real x, Real y) {
+  const Vec3 up = p.g_mag > 0 ? -p.g_hat : Vec3(0, 0, 1);
+  const Vec3 base(x, p.dim == 2 ? Real(0) : y, 0);
+  // Particles near the line, and the range of heights to scan.
+  std::vector<Index> near;
+  Real top = -std::numeric_limits<Real>::infinity(), bottom = -top;
+  const Real reach = Real(2) * p.h;
+  for (Index j = 0; j < ps.n_fluid; ++j) {
+    const Vec3 d = ps.pos[j] - base;
+    const Vec3 lateral = d - up * dot(d, up);
+    if (p.dim == 2 && std::abs(lateral.x) >= reach) continue;
+    if (p.dim == 3 && norm(lateral) >= reach) continue;
+    near.push_back(j);
+    top = std::max(top, dot(d, up));
+    bottom = std::min(bottom, dot(d, up));
+  }
+  if (near.empty()) return std::numeric_limits<Real>::quiet_NaN();
+  const Real step = p.dp / 8;
+  for (Real s = top + reach; s >= bottom - reach; s -= step) {
+    const Vec3 q = base + up * s;
+    Real sum = 0;
+    for (Index j : near) {
+      const Real r2 = norm2(q - ps.pos[j]);
+      if (r2 < p.radius2) sum += kernel_w(p.kernel, std::sqrt(r2)) * ps.mass[j] / ps.rho[j];
+    }
+    if (sum >= Real(0.5)) return s;
+  }
+  return std::numeric_limits<Real>::quiet_NaN();
+}
+
+Real probe_front(const ParticleSet<Host>& ps, const Vec3& origin, const Vec3& dir) {
+  const Real n = norm(dir);
+  const Vec3 u = n > 0 ? dir / n : Vec3(1, 0, 0);
+  Real best = -std::numeric_limits<Real>::infinity();
+  for (Index j = 0; j < ps.n_fluid; ++j) best = std::max(best, dot(ps.pos[j] - origin, u));
+  return best;
+}
+
+Vec3 probe_solid_force(const ParticleSet<Host>& ps, int solid_index) {
+  Vec3 f;
+  for (Index i = ps.wall_begin(); i < ps.size(); ++i)
+    if (ps.body[i] == solid_index) f += ps.acc[i] * ps.mass[i];
+  return f;
+}
+
+Energy probe_energy(const ParticleSet<Host>& ps, const Vec3& gravity) {
+  Energy e;
+  for (Index j = 0; j < ps.n_fluid; ++j) {
+    e.kinetic += Real(0.5) * ps.mass[j] * norm2(ps.vel[j]);
+    e.potential -= ps.mass[j] * dot(gravity, ps.pos[j]);
+  }
+  return e;
+}
+
+}  // namespace sphdem

@@ -1,0 +1,34 @@
+// Diagnostics computed from a host copy of the particles (DESIGN.md §3 diagnostics/):
+// pressure gauges, water height, front position, free-surface profiles, force on solids, energy.
+// They are evaluated at output intervals, so they favour clarity over speed.
+#pragma once
+
+#include <vector>
+
+#include "solver/fluid_params.hpp"
+#include "solver/particles.hpp"
+
+namespace sphdem {
+
+// Kernel-interpolated (Shepard-normalised) fluid pressure at a point; boundary particles are
+// ignored. Returns 0 where no fluid is within 2h.
+Real probe_pressure(const ParticleSet<Host>& ps, const StepParams& p, const Vec3& point);
+
+// Free-surface elevation on the vertical (along -g) line through (x, y): the highest point where
+// the fluid kernel sum sum_j V_j W(r - r_j) reaches 1/2. Returns NaN if no fluid is on the line.
+Real probe_surface_height(const ParticleSet<Host>& ps, const StepParams& p, Real x, Real y);
+
+// Largest projection (x_j - origin) . dir over fluid particles (dir is normalised).
+Real probe_front(const ParticleSet<Host>& ps, const Vec3& origin, const Vec3& dir);
+
+// Force of the fluid on a solid: sum over the solid's boundary particles of m_B a_B, where a_B
+// is the boundary particle's rate from fluid neighbours (pressure and viscous terms).
+Vec3 probe_solid_force(const ParticleSet<Host>& ps, int solid_index);
+
+struct Energy {
+  Real kinetic = 0, potential = 0;
+};
+// Fluid kinetic energy and potential energy -m g.x (relative to the origin).
+Energy probe_energy(const ParticleSet<Host>& ps, const Vec3& gravity);
+
+}  // namespace sphdem

@@ -1,0 +1,119 @@
+// Uniform cell grid for the neighbour search (DESIGN.md §4).
+//
+// The cell edge is at least the search radius (2h, plus a skin), so all neighbours of a particle
+// lie in its own cell and the 3^d cells around it. 2D runs in the x-z plane with one cell layer
+// in y. Axes may be periodic; then the cell count along the axis divides the period exactly and
+// distances use the minimum image.
+#pragma once
+
+#include <cstdint>
+
+#include "core/hd.hpp"
+#include "core/types.hpp"
+
+namespace sphdem {
+
+struct CellGrid {
+  int dim = 3;                   // 2 (x-z plane) or 3
+  Vec3 lo;                       // lower corner of the grid
+  Vec3 cell;                     // cell edge along each axis (>= search radius)
+  int n[3] = {1, 1, 1};          // cells along x, y, z
+  bool periodic[3] = {false, false, false};
+  Vec3 period;                   // domain length along periodic axes
+
+  SPHDEM_HD std::uint64_t cell_count() const {
+    return std::uint64_t(n[0]) * std::uint64_t(n[1]) * std::uint64_t(n[2]);
+  }
+
+  // Integer cell coordinate along axis k, clamped into the grid (periodic axes wrap).
+  SPHDEM_HD int coord(Real v, int k) const {
+    const Real lo_k = lo[k];
+    int c = int(std::floor((v - lo_k) / cell[k]));
+    if (periodic[k]) {
+      c %= n[k];
+      if (c < 0) c += n[k];
+      return c;
+    }
+    return c < 0 ? 0 : (c >= n[k] ? n[k] - 1 : c);
+  }
+
+  SPHDEM_HD std::uint64_t key(int cx, int cy, int cz) const {
+    return (std::uint64_t(cz) * std::uint64_t(n[1]) + std::uint64_t(cy)) * std::uint64_t(n[0]) +
+           std::uint64_t(cx);
+  }
+
+  SPHDEM_HD std::uint64_t key_of(const Vec3& p) const {
+    return key(coord(p.x, 0), dim == 2 ? 0 : coord(p.y, 1), coord(p.z, 2));
+  }
+
+  // r_i - r_j with the minimum image on periodic axes.
+  SPHDEM_HD Vec3 separation(const Vec3& a, const Vec3& b) const {
+    Vec3 d = a - b;
+    for (int k = 0; k < 3; ++k) {
+      if (periodic[k]) {
+        const Real L = period[k];
+        if (d[k] > Real(0.5) * L) d[k] -= L;
+        if (d[k] < Real(-0.5) * L) d[k] += L;
+      }
+    }
+    if (dim == 2) d.y = 0;
+    return d;
+  }
+};
+
+// Builds a grid covering [lo, hi] with cells of edge >= min_cell. Periodic axes must be at least
+// 3 cells long so a cell never appears twice among a particle's neighbour cells.
+CellGrid make_cell_grid(int dim, Vec3 lo, Vec3 hi, Real min_cell, const bool periodic[3]);
+
+// A cell list over a contiguous range of particle slots that has been sorted by cell key:
+// cell c holds the slots [start[c], end[c]). Empty cells have start == end.
+struct CellListView {
+  const std::uint32_t* start = nullptr;
+  const std::uint32_t* end = nullptr;
+};
+
+// Calls f(j, r_ij, r2) for every particle slot j of the list within sqrt(radius2) of point xi
+// (the particle itself included when it is in the list: the caller skips j == i when needed).
+// The visiting order is fixed: cells by (dz, dy, dx), then slots in sorted (cell, id) order, so
+// sums over neighbours are reproducible.
+template <class F>
+SPHDEM_HD inline void for_each_neighbor(const CellGrid& g, const CellListView& cl, const Vec3* pos,
+                                        const Vec3& xi, Real radius2, F&& f) {
+  const int cx = g.coord(xi.x, 0);
+  const int cy = g.dim == 2 ? 0 : g.coord(xi.y, 1);
+  const int cz = g.coord(xi.z, 2);
+  const int ry = g.dim == 2 ? 0 : 1;
+  for (int dz = -1; dz <= 1; ++dz) {
+    int z = cz + dz;
+    if (g.periodic[2]) {
+      z = (z + g.n[2]) % g.n[2];
+    } else if (z < 0 || z >= g.n[2]) {
+      continue;
+    }
+    for (int dy = -ry; dy <= ry; ++dy) {
+      int y = cy + dy;
+      if (g.periodic[1]) {
+        y = (y + g.n[1]) % g.n[1];
+      } else if (y < 0 || y >= g.n[1]) {
+        continue;
+      }
+      for (int dx = -1; dx <= 1; ++dx) {
+        int x = cx + dx;
+        if (g.periodic[0]) {
+          x = (x + g.n[0]) % g.n[0];
+        } else if (x < 0 || x >= g.n[0]) {
+          continue;
+        }
+        const std::uint64_t c = g.key(x, y, z);
+        const std::uint32_t e = cl.end[c];
+        for (std::uint32_t j = cl.start[c]; j < e; ++j) {
+          const Vec3 rij = g.separation(xi, pos[j]);
+          const Real r2 = norm2(rij);
+          if (r2 < radius2) f(Index(j), rij, r2);
+        }
+      }
+    }
+  }
+}
+
+}  // namespace sphdem

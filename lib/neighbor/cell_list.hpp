@@ -1,0 +1,81 @@
+// Sort-based cell list over a contiguous range of particle slots (DESIGN.md §4):
+//   1. sort the range by (cell key, global id): a stable sort by id, then a stable sort by cell;
+//   2. permute every field of the range by the resulting order (the caller owns the fields);
+//   3. mark each cell's [start, end) where the key changes.
+// Because each cell's particles are in id order, sums over neighbours come out in the same order
+// on every run and under any decomposition.
+#pragma once
+
+#include <cstdint>
+
+#include "core/exec.hpp"
+#include "neighbor/cell_grid.hpp"
+
+namespace sphdem {
+
+template <class Space>
+struct CellList {
+  Index begin = 0, count = 0;            // the slots this list covers
+  Buffer<std::uint32_t, Space> start, end;  // per cell, absolute slot indices
+  Buffer<std::uint64_t, Space> keys;     // sorted cell key of each slot in the range
+  Buffer<std::uint32_t, Space> order;    // source slot (relative to begin) of each sorted slot
+
+  CellListView view() const { return CellListView{start.data(), end.data()}; }
+};
+
+// Step 1: computes the sorted order of slots [begin, begin+count) into cl.order.
+template <class Space>
+void sort_cells(Space s, const CellGrid& g, const Vec3* pos, const GlobalId* id, GlobalId max_id,
+                Index begin, Index count, CellList<Space>& cl) {
+  cl.begin = begin;
+  cl.count = count;
+  cl.keys.resize(std::size_t(count));
+  cl.order.resize(std::size_t(count));
+  std::uint64_t* keys = cl.keys.data();
+  std::uint32_t* order = cl.order.data();
+  for_each(s, count, SPHDEM_LAMBDA(Index i) {
+    keys[i] = std::uint64_t(id[begin + i]);
+    order[i] = std::uint32_t(i);
+  });
+  sort_pairs_stable(s, keys, order, count, std::uint64_t(max_id));
+  const CellGrid grid = g;
+  for_each(s, count, SPHDEM_LAMBDA(Index i) { keys[i] = grid.key_of(pos[begin + order[i]]); });
+  sort_pairs_stable(s, keys, order, count, grid.cell_count() - 1);
+}
+
+// Step 2 helper: gathers field[begin + order[i]] into slot begin + i, using scratch storage.
+template <class T, class Space>
+void permute_range(Space s, Buffer<T, Space>& field, const CellList<Space>& cl,
+                   Buffer<T, Space>& scratch) {
+  const Index begin = cl.begin, count = cl.count;
+  if (count == 0) return;
+  scratch.resize(std::size_t(count));
+  T* f = field.data();
+  T* t = scratch.data();
+  const std::uint32_t* order = cl.order.data();
+  for_each(s, count, SPHDEM_LAMBDA(Index i) { t[i] = f[begin + order[i]]; });
+  for_each(s, count, SPHDEM_LAMBDA(Index i) { f[begin + i] = t[i]; });
+}
+
+// Step 3: fills start/end for every cell from the sorted keys.
+template <class Space>
+void mark_cells(Space s, const CellGrid& g, CellList<Space>& cl) {
+  const Index ncell = Index(g.cell_count());
+  cl.start.resize(std::size_t(ncell));
+  cl.end.resize(std::size_t(ncell));
+  std::uint32_t* st = cl.start.data();
+  std::uint32_t* en = cl.end.data();
+  for_each(s, ncell, SPHDEM_LAMBDA(Index c) {
+    st[c] = 0;
+    en[c] = 0;
+  });
+  const std::uint64_t* keys = cl.keys.data();
+  const Index begin = cl.begin, count = cl.count;
+  for_each(s, count, SPHDEM_LAMBDA(Index i) {
+    const std::uint64_t k = keys[i];
+    if (i == 0 || keys[i - 1] != k) st[k] = std::uint32_t(begin + i);
+    if (i == count - 1 || keys[i + 1] != k) en[k] = std::uint32_t(begin + i + 1);
+  });
+}
+
+}  // namespace sphdem

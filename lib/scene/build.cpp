@@ -1,0 +1,170 @@
+#include "scene/build.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "core/error.hpp"
+#include "sph/eos.hpp"
+
+namespace sphdem {
+
+Real boundary_depth(const Scene& scene) {
+  if (scene.sph.boundary_layers > 0) return Real(scene.sph.boundary_layers) * scene.sph.dp;
+  return Real(2) * scene.h();
+}
+
+namespace {
+
+// Lattice points (i + 1/2) dp inside [lo, hi] along one axis.
+void lattice_range(Real lo, Real hi, Real dp, long& i0, long& i1) {
+  i0 = long(std::ceil(lo / dp - Real(0.5) - Real(1e-9)));
+  i1 = long(std::floor(hi / dp - Real(0.5) + Real(1e-9)));
+}
+
+Real solids_phi(const Scene& scene, const Vec3& x, int* which) {
+  Real best = Real(1e30);
+  for (std::size_t s = 0; s < scene.solids.size(); ++s) {
+    const Real v = scene.solids[s].sdf->phi(x);
+    if (v < best) {
+      best = v;
+      if (which) *which = int(s);
+    }
+  }
+  return best;
+}
+
+template <class F>
+void for_lattice(const Scene& scene, Vec3 lo, Vec3 hi, F&& f) {
+  const Real dp = scene.sph.dp;
+  long ix0, ix1, iy0 = 0, iy1 = 0, iz0, iz1;
+  lattice_range(lo.x, hi.x, dp, ix0, ix1);
+  lattice_range(lo.z, hi.z, dp, iz0, iz1);
+  if (scene.dim == 3) lattice_range(lo.y, hi.y, dp, iy0, iy1);
+  for (long iz = iz0; iz <= iz1; ++iz)
+    for (long iy = iy0; iy <= iy1; ++iy)
+      for (long ix = ix0; ix <= ix1; ++ix) {
+        const Vec3 x((Real(ix) + Real(0.5)) * dp,
+                     scene.dim == 3 ? (Real(iy) + Real(0.5)) * dp : Real(0),
+                     (Real(iz) + Real(0.5)) * dp);
+        f(x);
+      }
+}
+
+}  // namespace
+
+ParticleSet<Host> build_particles(const Scene& scene, BuildReport* report) {
+  const Real dp = scene.sph.dp;
+  const Real mass = scene.fluid.rho0 * std::pow(dp, Real(scene.dim));
+  const Real gmag = norm(scene.gravity);
+  const Vec3 ghat = gmag > 0 ? scene.gravity / gmag : Vec3();
+
+  std::vector<Vec3> fpos, fvel;
+  std::vector<Real> fsurface;  // height of the block's surface along -g, per particle
+  BuildReport rep;
+  for (const FluidBlock& b : scene.fluid_blocks) {
+    // The block's free surface: its highest corner along -g.
+    Real top = -1e30, bottom = 1e30;
+    for (int c = 0; c < 8; ++c) {
+      const Vec3 corner((c & 1) ? b.hi.x : b.lo.x, (c & 2) ? b.hi.y : b.lo.y, (c & 4) ? b.hi.z : b.lo.z);
+      const Real up = -dot(corner, ghat);
+      top = std::max(top, up);
+      bottom = std::min(bottom, up);
+    }
+    rep.fluid_height = std::max(rep.fluid_height, top - bottom);
+    for_lattice(scene, b.lo, b.hi, [&](const Vec3& x) {
+      if (solids_phi(scene, x, nullptr) <= Real(0)) return;
+      fpos.push_back(x);
+      fvel.push_back(b.velocity);
+      fsurface.push_back(b.hydrostatic && gmag > 0 ? top : Real(-1e30));
+    });
+  }
+
+  // Boundary particles: lattice points in the domain with -depth < phi < 0.
+  const Real depth = boundary_depth(scene);
+  std::vector<Vec3> bpos, bghost, bnormal;
+  std::vector<std::int32_t> bbody;
+  // The domain bounds the fluid; walls may lie up to `depth` outside it (non-periodic axes).
+  Vec3 lo = scene.domain_lo, hi = scene.domain_hi;
+  for (int k = 0; k < 3; ++k) {
+    if (scene.periodic[k]) continue;
+    lo[k] -= depth;
+    hi[k] += depth;
+  }
+  for_lattice(scene, lo, hi, [&](const Vec3& x) {
+    int which = -1;
+    const Real phi = solids_phi(scene, x, &which);
+    if (!(phi < Real(0) && phi > -depth)) return;
+    Vec3 n = scene.solids[std::size_t(which)].sdf->grad(x);
+    const Real nn = norm(n);
+    n = nn > 0 ? n / nn : Vec3(0, 0, 1);
+    if (scene.dim == 2) {
+      n.y = 0;
+      const Real n2 = norm(n);
+      n = n2 > 0 ? n / n2 : Vec3(0, 0, 1);
+    }
+    bpos.push_back(x);
+    bghost.push_back(x - n * (Real(2) * phi));
+    bnormal.push_back(n);
+    bbody.push_back(which);
+  });
+
+  ParticleSet<Host> ps;
+  ps.n_fluid = Index(fpos.size());
+  ps.n_wall = Index(bpos.size());
+  ps.resize(ps.size());
+  GlobalId next_id = 0;
+  for (Index i = 0; i < ps.n_fluid; ++i) {
+    ps.id[i] = next_id++;
+    ps.pos[i] = fpos[std::size_t(i)];
+    ps.vel[i] = fvel[std::size_t(i)];
+    ps.vel_prev[i] = ps.vel[i];
+    ps.mass[i] = mass;
+    ps.body[i] = -1;
+  }
+  for (Index k = 0; k < ps.n_wall; ++k) {
+    const Index i = ps.wall_begin() + k;
+    ps.id[i] = next_id++;
+    ps.pos[i] = bpos[std::size_t(k)];
+    ps.ghost[i] = bghost[std::size_t(k)];
+    ps.normal[i] = bnormal[std::size_t(k)];
+    ps.body[i] = bbody[std::size_t(k)];
+    ps.mass[i] = mass;
+  }
+  rep.fluid = ps.n_fluid;
+  rep.wall = ps.n_wall;
+
+  // Initial density: hydrostatic pressure from each block's surface, through the Tait EOS.
+  const Real c0 = resolve_sound_speed(scene, rep);
+  const EosParams e = make_eos(scene.fluid.rho0, c0, scene.fluid.gamma);
+  for (Index i = 0; i < ps.n_fluid; ++i) {
+    const Real surf = fsurface[std::size_t(i)];
+    Real p = 0;
+    if (surf > Real(-1e29)) p = scene.fluid.rho0 * gmag * std::max(Real(0), surf - (-dot(ps.pos[i], ghat)));
+    ps.rho[i] = tait_density(e, p);
+    ps.rho_prev[i] = ps.rho[i];
+    ps.press[i] = p;
+  }
+  for (Index k = 0; k < ps.n_wall; ++k) {
+    const Index i = ps.wall_begin() + k;
+    ps.rho[i] = scene.fluid.rho0;
+    ps.rho_prev[i] = scene.fluid.rho0;
+  }
+  if (report) *report = rep;
+  return ps;
+}
+
+Real resolve_sound_speed(const Scene& scene, const BuildReport& report) {
+  if (scene.fluid.c0 > 0) return scene.fluid.c0;
+  const Real g = norm(scene.gravity);
+  const Real vmax = Real(2) * std::sqrt(g * report.fluid_height);
+  if (!(vmax > 0)) {
+    std::ostringstream os;
+    os << scene.source << ": fluid.c0: cannot derive the speed of sound (no gravity or no fluid); "
+       << "set fluid.c0 explicitly";
+    throw InputError(os.str());
+  }
+  return scene.fluid.c0_factor * vmax;
+}
+
+}  // namespace sphdem

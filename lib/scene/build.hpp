@@ -1,0 +1,25 @@
+// Turns a scene into particles (DESIGN.md §2): fluid blocks on the dp lattice minus solids,
+// boundary particles on the same lattice where -depth < phi < 0, inside the domain, with their
+// mDBC ghost nodes r_G = r_B - 2 phi grad phi.
+#pragma once
+
+#include "scene/scene.hpp"
+#include "solver/particles.hpp"
+
+namespace sphdem {
+
+struct BuildReport {
+  Index fluid = 0, wall = 0, grain = 0;
+  Real fluid_height = 0;  // largest fluid depth along gravity, for c0
+};
+
+ParticleSet<Host> build_particles(const Scene& scene, BuildReport* report = nullptr);
+
+// Speed of sound: scene value, or c0_factor * 2 sqrt(g H) with H the deepest fluid column:
+// 2 sqrt(g H) is the dam-break front speed (Ritter), the fastest a column of depth H flows.
+Real resolve_sound_speed(const Scene& scene, const BuildReport& report);
+
+// Boundary depth: boundary_layers * dp, or the kernel support 2h when layers is 0.
+Real boundary_depth(const Scene& scene);
+
+}  // namespace sphdem

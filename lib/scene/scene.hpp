@@ -1,0 +1,104 @@
+// The resolved scene: everything a run needs, after YAML parsing, overrides and defaults.
+// io/scene_yaml.cpp fills it (and validates every key); scene/build.cpp turns it into particles.
+// Units are SI throughout. Viscosities say whether they are dynamic (Pa s) or kinematic (m^2/s).
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/types.hpp"
+#include "geometry/sdf.hpp"
+
+namespace sphdem {
+
+enum class DiffusionModel { kNone, kMolteni, kFourtakas };
+enum class ViscosityModel { kLaminar, kArtificial };
+enum class BoundaryMethod { kDbc, kMdbc };
+enum class SlipCondition { kNoSlip, kFreeSlip };
+enum class Integrator { kVerlet, kSymplectic };
+
+struct FluidParams {
+  Real rho0 = 1000;        // reference density, kg/m^3
+  Real c0 = 0;             // speed of sound, m/s; 0 = derive from c0_factor * sqrt(g * H_max)
+  Real c0_factor = 10;     // c0 = c0_factor * expected max speed when c0 is 0
+  Real gamma = 7;          // Tait exponent (Eq. 6)
+  ViscosityModel viscosity = ViscosityModel::kLaminar;
+  Real nu = 1e-6;          // laminar kinematic viscosity, m^2/s (Lo-Shao term, Eq. 9)
+  Real alpha = 0.01;       // artificial viscosity coefficient (Monaghan)
+  DiffusionModel diffusion = DiffusionModel::kFourtakas;
+  Real delta = 0.1;        // delta-SPH coefficient (Eq. 8)
+};
+
+struct SphParams {
+  Real dp = 0.01;          // initial particle spacing, m
+  Real h_factor = 1.2;     // h = h_factor * sqrt(dim) * dp (DualSPHysics "coefh")
+  BoundaryMethod boundary = BoundaryMethod::kMdbc;
+  SlipCondition slip = SlipCondition::kNoSlip;
+  int boundary_layers = 0; // 0 = enough layers to fill the kernel support (2h)
+};
+
+struct TimeParams {
+  Real end = 1.0;          // simulated time, s
+  Real cfl = 0.2;          // Courant number (Eq. 23)
+  Real dt_fixed = 0;       // > 0: fixed time step (verification only)
+  Real dt_min = 1e-9;      // floor: a step stuck here is a stability fault
+  Integrator integrator = Integrator::kVerlet;
+  int verlet_euler_every = 40;
+};
+
+struct GuardParams {
+  Real rho_min_ratio = 0.7;  // density outside [rho_min_ratio, rho_max_ratio] * rho0 is a fault
+  Real rho_max_ratio = 1.3;
+  Real mach_max = 0.1;       // v_max / c0 above this is a fault
+  int check_every = 1;       // steps between guard checks
+};
+
+struct Solid {
+  std::string name;
+  geom::SdfPtr sdf;        // phi < 0 inside the solid
+};
+
+struct FluidBlock {
+  Vec3 lo, hi;             // filled on the dp lattice, minus solids
+  Vec3 velocity;           // initial velocity
+  bool hydrostatic = true; // initial pressure rho0 g (surface - z), surface = block top
+};
+
+struct PressureGauge { std::string name; Vec3 point; };
+struct HeightGauge { std::string name; Real x = 0, y = 0; };  // vertical line at (x, y)
+struct FrontTracker { std::string name; Vec3 origin; Vec3 direction{1, 0, 0}; };
+struct ProfileSpec { std::string name; Vec3 from, to; int samples = 100; std::vector<Real> times; };
+struct ForceProbe { std::string name; std::string solid; };
+
+struct Diagnostics {
+  Real every = 0.01;       // simulated seconds between CSV rows
+  std::vector<PressureGauge> pressure_gauges;
+  std::vector<HeightGauge> height_gauges;
+  std::vector<FrontTracker> fronts;
+  std::vector<ProfileSpec> profiles;
+  std::vector<ForceProbe> forces;
+  bool energy = true;
+};
+
+struct Scene {
+  std::string source;      // file it came from
+  std::string name;
+  int dim = 2;
+  Vec3 domain_lo, domain_hi;   // particles leaving it are removed and counted
+  bool periodic[3] = {false, false, false};
+  Vec3 gravity{0, 0, -9.81};
+  FluidParams fluid;
+  SphParams sph;
+  TimeParams time;
+  GuardParams guards;
+  std::vector<Solid> solids;
+  std::vector<FluidBlock> fluid_blocks;
+  Diagnostics diagnostics;
+  std::string yaml_text;   // the resolved scene as YAML, stored in outputs and checkpoints
+
+  Real h() const;          // smoothing length
+  const Solid* find_solid(const std::string& name) const;
+};
+
+}  // namespace sphdem

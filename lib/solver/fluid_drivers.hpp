@@ -1,0 +1,199 @@
+// Fluid-step drivers, written once and templated on the execution space (DESIGN.md §3).
+// Each is a gather loop: particle i writes only its own slots. Physics comes from lib/sph/.
+#pragma once
+
+#include "core/exec.hpp"
+#include "neighbor/cell_grid.hpp"
+#include "solver/fluid_params.hpp"
+#include "solver/particles.hpp"
+#include "sph/continuity.hpp"
+#include "sph/eos.hpp"
+#include "sph/kernel.hpp"
+#include "sph/mdbc.hpp"
+#include "sph/momentum.hpp"
+
+namespace sphdem {
+
+// The cell lists a driver needs: fluid (owned + halo) and boundary (walls + grains).
+struct NeighborLists {
+  CellListView fluid;
+  CellListView boundary;
+};
+
+// p = Tait(rho) for slots [begin, end).
+template <class Space>
+void compute_pressure(Space s, ParticleView v, Index begin, Index end, EosParams eos) {
+  for_each(s, end - begin, SPHDEM_LAMBDA(Index k) {
+    const Index i = begin + k;
+    v.press[i] = tait_pressure(eos, v.rho[i]);
+  });
+}
+
+// mDBC: boundary density from the ghost-node interpolation over fluid, and the boundary velocity
+// for the viscous term. Boundary slots [begin, end); v.vel holds the solid's own velocity.
+template <class Space>
+void update_mdbc(Space s, ParticleView v, NeighborLists nl, StepParams p, Index begin, Index end) {
+  for_each(s, end - begin, SPHDEM_LAMBDA(Index k) {
+    const Index b = begin + k;
+    const Vec3 rg = v.ghost[b];
+    MdbcSums sums;
+    for_each_neighbor(p.grid, nl.fluid, v.pos, rg, p.radius2,
+                      [&](Index j, const Vec3& r_gj, Real r2) {
+                        const Real r = std::sqrt(r2);
+                        const Vec3 d = -r_gj;  // r_j - r_G
+                        mdbc_accumulate(sums, v.mass[j] / v.rho[j], v.rho[j], v.vel[j], d,
+                                        kernel_w(p.kernel, r), kernel_f(p.kernel, r));
+                      });
+    const Vec3 rb_minus_rg = p.grid.separation(v.pos[b], rg);
+    Real rho_b = mdbc_boundary_density(sums, p.dim, rb_minus_rg, p.eos.rho0, p.mdbc_det_min);
+    // Walls push, never pull: a boundary below rho0 would attract the free surface.
+    if (rho_b < p.eos.rho0) rho_b = p.eos.rho0;
+    v.rho[b] = rho_b;
+    v.press[b] = tait_pressure(p.eos, rho_b);
+    v.vel_bc[b] = mdbc_boundary_velocity(sums, v.vel[b], v.normal[b], p.free_slip);
+  });
+}
+
+// Accumulates, for particle i at r_i, the interaction with neighbour j. Shared by fluid and
+// boundary gathers so the pair physics exists once. `j_fluid` selects density diffusion (fluid
+// pairs only, as in DualSPHysics) and the velocity seen by the viscous term.
+struct PairSums {
+  Vec3 acc;
+  Real drho = 0;
+  Real visc_rate = 0;  // max_j |h v_ij.r_ij/(r^2+eta^2)|
+};
+
+SPHDEM_HD inline void accumulate_pair(const StepParams& p, const ParticleView& v, Index i, Index j,
+                                      const Vec3& r_ij, Real r2, bool i_fluid, bool j_fluid,
+                                      PairSums& out) {
+  if (r2 <= Real(0)) return;  // self
+  const Real r = std::sqrt(r2);
+  const Real f = kernel_f(p.kernel, r);
+  const Real rho_i = v.rho[i], rho_j = v.rho[j];
+  const Real m_j = v.mass[j];
+  // Continuity uses the solid's own velocity for boundary particles.
+  const Vec3 v_ij = v.vel[i] - v.vel[j];
+  out.drho += continuity_ij(m_j, v_ij, r_ij, f);
+  if (p.diffusion && i_fluid && j_fluid) {
+    const Real height_ij = -dot(r_ij, p.g_hat);
+    const Real d = diffusion_drho_ij(p.eos, rho_i, rho_j, p.diffusion_hydrostatic, p.g_mag, height_ij);
+    out.drho += diffusion_ij(p.delta_h_c0, d, f, m_j, rho_j);
+  }
+  out.acc += pressure_acc_ij(m_j, v.press[i], rho_i, v.press[j], rho_j, r_ij, f);
+  // Viscous term: a boundary neighbour contributes through its mDBC velocity.
+  const Vec3 vi = i_fluid || !p.mdbc ? v.vel[i] : v.vel_bc[i];
+  const Vec3 vj = j_fluid || !p.mdbc ? v.vel[j] : v.vel_bc[j];
+  const Vec3 vv_ij = vi - vj;
+  if (p.laminar) {
+    out.acc += laminar_acc_ij(m_j, p.nu, rho_i, rho_j, r2, f, p.eta2, vv_ij);
+  } else {
+    const Real c_mean = p.eos.c0;
+    out.acc += artificial_acc_ij(m_j, p.alpha, c_mean, p.h, rho_i, rho_j, r_ij, r2, f, p.eta2, vv_ij);
+  }
+  const Real rate = visc_dt_rate_ij(p.h, vv_ij, r_ij, r2, p.eta2);
+  if (rate > out.visc_rate) out.visc_rate = rate;
+}
+
+// Rates of change for slots [begin, end): acceleration (with gravity for fluid), drho/dt, and
+// the per-particle viscous dt rate into `rate`. Fluid slots see fluid and boundary neighbours;
+// boundary slots see fluid only (their acc, times their mass, is the fluid force on the solid).
+template <class Space>
+void compute_rates(Space s, ParticleView v, NeighborLists nl, StepParams p, Index begin, Index end,
+                   bool fluid_range, Real* rate) {
+  for_each(s, end - begin, SPHDEM_LAMBDA(Index k) {
+    const Index i = begin + k;
+    const Vec3 ri = v.pos[i];
+    PairSums sums;
+    for_each_neighbor(p.grid, nl.fluid, v.pos, ri, p.radius2,
+                      [&](Index j, const Vec3& r_ij, Real r2) {
+                        accumulate_pair(p, v, i, j, r_ij, r2, fluid_range, true, sums);
+                      });
+    if (fluid_range) {
+      for_each_neighbor(p.grid, nl.boundary, v.pos, ri, p.radius2,
+                        [&](Index j, const Vec3& r_ij, Real r2) {
+                          accumulate_pair(p, v, i, j, r_ij, r2, true, false, sums);
+                        });
+      v.acc[i] = sums.acc + p.gravity;
+    } else {
+      v.acc[i] = sums.acc;
+    }
+    v.drho[i] = sums.drho;
+    rate[i] = sums.visc_rate;
+  });
+}
+
+// Verlet (seed §2; DualSPHysics): with a = a^n, D = drho^n,
+//   r^{n+1} = r^n + dt v^n + dt^2/2 a
+//   v^{n+1} = v^{n-1} + 2 dt a,  rho^{n+1} = rho^{n-1} + 2 dt D       (regular step)
+//   v^{n+1} = v^n + dt a,        rho^{n+1} = rho^n + dt D             (Euler step, every N)
+// vel_prev/rho_prev hold the n-1 values on entry and the n values on return.
+SPHDEM_HD inline void verlet_update(Vec3& pos, Vec3& vel, Vec3& vel_prev, Real& rho, Real& rho_prev,
+                                    const Vec3& a, Real d, Real dt, bool euler) {
+  const Vec3 v_n = vel;
+  const Real rho_n = rho;
+  pos += v_n * dt + a * (Real(0.5) * dt * dt);
+  if (euler) {
+    vel = v_n + a * dt;
+    rho = rho_n + d * dt;
+  } else {
+    vel = vel_prev + a * (Real(2) * dt);
+    rho = rho_prev + d * (Real(2) * dt);
+  }
+  vel_prev = v_n;
+  rho_prev = rho_n;
+}
+
+template <class Space>
+void integrate_verlet(Space s, ParticleView v, Index begin, Index end, Real dt, bool euler) {
+  for_each(s, end - begin, SPHDEM_LAMBDA(Index k) {
+    const Index i = begin + k;
+    verlet_update(v.pos[i], v.vel[i], v.vel_prev[i], v.rho[i], v.rho_prev[i], v.acc[i], v.drho[i],
+                  dt, euler);
+  });
+}
+
+// DBC density for boundary slots: rho^{n+1} = rho^n + dt D, never below rho0.
+template <class Space>
+void integrate_dbc_density(Space s, ParticleView v, Index begin, Index end, Real dt, EosParams eos) {
+  for_each(s, end - begin, SPHDEM_LAMBDA(Index k) {
+    const Index i = begin + k;
+    Real rho = v.rho[i] + v.drho[i] * dt;
+    if (rho < eos.rho0) rho = eos.rho0;
+    v.rho[i] = rho;
+    v.press[i] = tait_pressure(eos, rho);
+  });
+}
+
+// Symplectic position Verlet (DualSPHysics "symplectic"):
+//   predictor: r^{n+1/2} = r^n + dt/2 v^n, v^{n+1/2} = v^n + dt/2 a^n, rho^{n+1/2} = rho^n + dt/2 D^n
+//   corrector: v^{n+1} = v^n + dt a^{n+1/2}, r^{n+1} = r^n + dt (v^n + v^{n+1})/2,
+//              rho^{n+1} = rho^n (2 - eps)/(2 + eps), eps = -D^{n+1/2}/rho^{n+1/2} dt.
+// The predictor keeps r^n in the fluid slot's `ghost` field (unused for fluid) and v^n, rho^n in
+// vel_prev/rho_prev.
+template <class Space>
+void symplectic_predict(Space s, ParticleView v, Index begin, Index end, Real dt) {
+  for_each(s, end - begin, SPHDEM_LAMBDA(Index k) {
+    const Index i = begin + k;
+    v.ghost[i] = v.pos[i];
+    v.vel_prev[i] = v.vel[i];
+    v.rho_prev[i] = v.rho[i];
+    v.pos[i] += v.vel[i] * (Real(0.5) * dt);
+    v.vel[i] += v.acc[i] * (Real(0.5) * dt);
+    v.rho[i] += v.drho[i] * (Real(0.5) * dt);
+  });
+}
+
+template <class Space>
+void symplectic_correct(Space s, ParticleView v, Index begin, Index end, Real dt) {
+  for_each(s, end - begin, SPHDEM_LAMBDA(Index k) {
+    const Index i = begin + k;
+    const Vec3 v_n = v.vel_prev[i];
+    const Vec3 v_new = v_n + v.acc[i] * dt;
+    v.pos[i] = v.ghost[i] + (v_n + v_new) * (Real(0.5) * dt);
+    v.vel[i] = v_new;
+    const Real eps = -v.drho[i] / v.rho[i] * dt;
+    v.rho[i] = v.rho_prev[i] * (Real(2) - eps) / (Real(2) + eps);
+  });
+}
+
+}  // namespace sphdem

@@ -1,0 +1,96 @@
+// Particle storage: structure of arrays, one buffer per field, typed by execution space
+// (DESIGN.md §4). The same field names are used in memory, HDF5 and VTK output.
+//
+// Slot layout on a rank:
+//   [0, n_fluid)                       owned fluid particles
+//   [n_fluid, n_fluid + n_halo)         halo copies of other ranks' fluid (empty on one rank)
+//   [fluid_end(), fluid_end() + n_wall) fixed-wall boundary particles
+//   [..., + n_grain)                    grain boundary particles
+// Every particle carries a 64-bit global id; compare, sort and restart by id, never by slot.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "core/exec.hpp"
+#include "core/types.hpp"
+
+namespace sphdem {
+
+// Raw pointers to every field, passed by value into kernels.
+struct ParticleView {
+  Index n = 0;  // all slots
+  GlobalId* id = nullptr;
+  Vec3* pos = nullptr;
+  Vec3* vel = nullptr;
+  Real* rho = nullptr;
+  Real* mass = nullptr;
+  Real* press = nullptr;
+  Vec3* acc = nullptr;       // dv/dt of the current step
+  Real* drho = nullptr;      // drho/dt of the current step
+  Vec3* vel_prev = nullptr;  // Verlet: velocity at the previous step (n-1)
+  Real* rho_prev = nullptr;  // Verlet: density at the previous step (n-1)
+  Vec3* ghost = nullptr;     // boundary: mDBC ghost node; fluid: unused
+  Vec3* normal = nullptr;    // boundary: outward unit normal of the solid; fluid: unused
+  Vec3* vel_bc = nullptr;    // boundary: mDBC velocity seen by the viscous term; fluid: unused
+  std::int32_t* body = nullptr;  // boundary: solid index; fluid: -1
+};
+
+template <class Space>
+struct ParticleSet {
+  Index n_fluid = 0, n_halo = 0, n_wall = 0, n_grain = 0;
+
+  Buffer<GlobalId, Space> id;
+  Buffer<Vec3, Space> pos, vel, acc, vel_prev, ghost, normal, vel_bc;
+  Buffer<Real, Space> rho, mass, press, drho, rho_prev;
+  Buffer<std::int32_t, Space> body;
+
+  Index fluid_end() const { return n_fluid + n_halo; }
+  Index wall_begin() const { return fluid_end(); }
+  Index size() const { return n_fluid + n_halo + n_wall + n_grain; }
+
+  // Calls f(name, buffer) for every field, in a fixed order (I/O, copies and permutation).
+  template <class F>
+  void for_each_field(F&& f) {
+    f("id", id);
+    f("pos", pos);
+    f("vel", vel);
+    f("rho", rho);
+    f("mass", mass);
+    f("press", press);
+    f("acc", acc);
+    f("drho", drho);
+    f("vel_prev", vel_prev);
+    f("rho_prev", rho_prev);
+    f("ghost", ghost);
+    f("normal", normal);
+    f("vel_bc", vel_bc);
+    f("body", body);
+  }
+
+  void resize(Index n) {
+    for_each_field([n](const char*, auto& b) { b.resize(std::size_t(n)); });
+  }
+
+  ParticleView view() {
+    ParticleView v;
+    v.n = size();
+    v.id = id.data();
+    v.pos = pos.data();
+    v.vel = vel.data();
+    v.rho = rho.data();
+    v.mass = mass.data();
+    v.press = press.data();
+    v.acc = acc.data();
+    v.drho = drho.data();
+    v.vel_prev = vel_prev.data();
+    v.rho_prev = rho_prev.data();
+    v.ghost = ghost.data();
+    v.normal = normal.data();
+    v.vel_bc = vel_bc.data();
+    v.body = body.data();
+    return v;
+  }
+};
+
+}  // namespace sphdem

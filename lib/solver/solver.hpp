@@ -1,0 +1,55 @@
+// The time loop's core: one fluid step on one execution space. The Simulation (app/) owns I/O,
+// diagnostics and guards and talks to the solver through this interface, so it does not care
+// whether particles live on the host or the device.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/exec.hpp"
+#include "scene/scene.hpp"
+#include "solver/fluid_params.hpp"
+#include "solver/particles.hpp"
+
+namespace sphdem {
+
+struct StepStats {
+  Real dt = 0;
+  Real dt_force = 0, dt_acoustic = 0, dt_viscous = 0;  // the three limits of Eq. (23)
+  Real max_speed = 0;
+  Real rho_min = 0, rho_max = 0;
+  Index removed = 0;  // fluid particles that left the domain in this step
+};
+
+// Wall time spent per phase, seconds (summed over steps).
+struct PhaseTimes {
+  double cell_list = 0, mdbc = 0, forces = 0, integrate = 0, other = 0;
+};
+
+class SolverBase {
+ public:
+  virtual ~SolverBase() = default;
+  virtual const char* space_name() const = 0;
+  // Advances one step; returns what it measured.
+  virtual StepStats step() = 0;
+  virtual Real time() const = 0;
+  virtual std::int64_t step_count() const = 0;
+  virtual const StepParams& params() const = 0;
+  // A host copy of all particles (no copy on the host space).
+  virtual const ParticleSet<Host>& host_particles() = 0;
+  virtual Index removed_count() const = 0;
+  virtual Real removed_mass() const = 0;
+  virtual const PhaseTimes& phase_times() const = 0;
+  // Number of neighbour pairs within 2h seen by the last force pass (for PIPS).
+  virtual double last_pair_count() = 0;
+};
+
+// Builds a solver on the host (OpenMP) or the device (CUDA). `particles` come from
+// build_particles(); c0 is the resolved speed of sound.
+std::unique_ptr<SolverBase> make_host_solver(const Scene& scene, ParticleSet<Host> particles, Real c0);
+std::unique_ptr<SolverBase> make_device_solver(const Scene& scene, ParticleSet<Host> particles,
+                                               Real c0);
+
+}  // namespace sphdem

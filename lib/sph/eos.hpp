@@ -1,0 +1,34 @@
+// Tait equation of state, seed Eq. (6): p = B [(rho/rho0)^gamma - 1], B = rho0 c0^2 / gamma.
+#pragma once
+
+#include "core/hd.hpp"
+#include "core/types.hpp"
+
+namespace sphdem {
+
+struct EosParams {
+  Real rho0 = 1000;
+  Real c0 = 10;
+  Real gamma = 7;
+  Real b = 0;  // rho0 c0^2 / gamma
+};
+
+inline EosParams make_eos(Real rho0, Real c0, Real gamma) {
+  return EosParams{rho0, c0, gamma, rho0 * c0 * c0 / gamma};
+}
+
+SPHDEM_HD inline Real tait_pressure(const EosParams& e, Real rho) {
+  return e.b * (std::pow(rho / e.rho0, e.gamma) - Real(1));
+}
+
+// Inverse: the density that gives pressure p.
+SPHDEM_HD inline Real tait_density(const EosParams& e, Real p) {
+  return e.rho0 * std::pow(Real(1) + p / e.b, Real(1) / e.gamma);
+}
+
+// Speed of sound at density rho: c = c0 (rho/rho0)^((gamma-1)/2).
+SPHDEM_HD inline Real tait_sound_speed(const EosParams& e, Real rho) {
+  return e.c0 * std::pow(rho / e.rho0, (e.gamma - Real(1)) * Real(0.5));
+}
+
+}  // namespace sphdem

@@ -1,0 +1,44 @@
+// Wendland C2 kernel, seed Eq. (2): W(q,h) = alpha_D (1 - q/2)^4 (1 + 2q) for 0 <= q <= 2,
+// q = r/h; alpha_D = 7/(4 pi h^2) in 2D and 21/(16 pi h^3) in 3D. Support radius 2h.
+#pragma once
+
+#include "core/hd.hpp"
+#include "core/types.hpp"
+
+namespace sphdem {
+
+struct KernelParams {
+  int dim = 3;
+  Real h = 0;      // smoothing length
+  Real alpha = 0;  // alpha_D
+  Real inv_h = 0;
+};
+
+inline KernelParams make_kernel(int dim, Real h) {
+  KernelParams k;
+  k.dim = dim;
+  k.h = h;
+  k.inv_h = Real(1) / h;
+  k.alpha = dim == 2 ? Real(7) / (Real(4) * kPi * h * h) : Real(21) / (Real(16) * kPi * h * h * h);
+  return k;
+}
+
+// W(r, h).
+SPHDEM_HD inline Real kernel_w(const KernelParams& k, Real r) {
+  const Real q = r * k.inv_h;
+  if (q >= Real(2)) return Real(0);
+  const Real a = Real(1) - Real(0.5) * q;
+  const Real a2 = a * a;
+  return k.alpha * a2 * a2 * (Real(2) * q + Real(1));
+}
+
+// F(r) = (dW/dr) / r, so that grad_i W(r_ij) = r_ij * F. dW/dq = -5 alpha q (1 - q/2)^3, which
+// gives F = -5 alpha (1 - q/2)^3 / h^2 (finite at r = 0).
+SPHDEM_HD inline Real kernel_f(const KernelParams& k, Real r) {
+  const Real q = r * k.inv_h;
+  if (q >= Real(2)) return Real(0);
+  const Real a = Real(1) - Real(0.5) * q;
+  return Real(-5) * k.alpha * a * a * a * k.inv_h * k.inv_h;
+}
+
+}  // namespace sphdem

@@ -1,0 +1,125 @@
+// Modified dynamic boundary condition (mDBC), English et al. (2022); seed Eqs. (21)-(22).
+//
+// Each boundary particle B has a ghost node G mirrored into the fluid across the solid surface,
+// r_G = r_B - 2 phi(r_B) grad phi(r_B). At G, density and its gradient come from a first-order
+// consistent SPH interpolation over fluid particles only. From the Taylor expansion
+// rho_j = rho_G + (r_j - r_G) . grad rho_G, weighted by V_j W and by V_j grad W and summed:
+//
+//   [ sum V_j W          sum V_j (r_j - r_G) W        ] [ rho_G      ]   [ sum V_j rho_j W      ]
+//   [ sum V_j gradW      sum V_j gradW (r_j - r_G)^T  ] [ grad rho_G ] = [ sum V_j rho_j gradW  ]
+//
+// with gradW = grad_G W(r_G - r_j). If the matrix is near-singular (few neighbours), fall back to
+// a Shepard average with zero gradient. Then rho_B = rho_G + (r_B - r_G) . grad rho_G  (Eq. 21).
+// The boundary velocity for the viscous term mirrors the Shepard velocity at G (Eq. 22):
+// no-slip reverses it, free-slip reverses only its normal component.
+#pragma once
+
+#include "core/hd.hpp"
+#include "core/types.hpp"
+
+namespace sphdem {
+
+// Accumulated sums at one ghost node (a 4x4 system in 3D; in 2D the y row/column is unused).
+struct MdbcSums {
+  Real a[4][4] = {{0}};  // row 0: W terms; rows 1-3: gradW terms
+  Real b[4] = {0};
+  Real shepard = 0;      // sum V_j W
+  Vec3 vel;              // sum V_j v_j W
+};
+
+// Adds fluid particle j (at offset d = r_j - r_G, distance r) to the sums.
+SPHDEM_HD inline void mdbc_accumulate(MdbcSums& s, Real v_j, Real rho_j, const Vec3& vel_j,
+                                      const Vec3& d, Real w, Real f) {
+  // gradW at G with respect to r_G: (r_G - r_j) F = -d F.
+  const Vec3 gw = d * (-f);
+  const Real vw = v_j * w;
+  const Real row0[4] = {vw, vw * d.x, vw * d.y, vw * d.z};
+  const Real g[3] = {v_j * gw.x, v_j * gw.y, v_j * gw.z};
+  for (int c = 0; c < 4; ++c) s.a[0][c] += row0[c];
+  for (int r = 0; r < 3; ++r) {
+    s.a[r + 1][0] += g[r];
+    s.a[r + 1][1] += g[r] * d.x;
+    s.a[r + 1][2] += g[r] * d.y;
+    s.a[r + 1][3] += g[r] * d.z;
+    s.b[r + 1] += g[r] * rho_j;
+  }
+  s.b[0] += vw * rho_j;
+  s.shepard += vw;
+  s.vel += vel_j * vw;
+}
+
+// Solves for rho_G and grad rho_G; returns rho_B extrapolated to offset rb_minus_rg = r_B - r_G.
+// Uses Gaussian elimination with partial pivoting on the (dim+1) system. `det_min` is the
+// relative threshold below which the Shepard fallback is used. Returns rho_fallback when no fluid
+// is near the ghost node.
+SPHDEM_HD inline Real mdbc_boundary_density(const MdbcSums& s, int dim, const Vec3& rb_minus_rg,
+                                            Real rho_fallback, Real det_min) {
+  if (s.shepard <= Real(0)) return rho_fallback;
+  // Indices of the unknowns used: rho, d/dx, (d/dy), d/dz.
+  int idx[4] = {0, 1, 2, 3};
+  int n = 4;
+  if (dim == 2) {
+    idx[2] = 3;
+    n = 3;
+  }
+  Real m[4][5];
+  for (int r = 0; r < n; ++r) {
+    for (int c = 0; c < n; ++c) m[r][c] = s.a[idx[r]][idx[c]];
+    m[r][n] = s.b[idx[r]];
+  }
+  // Scale-aware singularity test: determinant relative to the product of row norms.
+  Real det = 1;
+  Real scale = 1;
+  for (int r = 0; r < n; ++r) {
+    Real rn = 0;
+    for (int c = 0; c < n; ++c) rn += m[r][c] * m[r][c];
+    scale *= std::sqrt(rn);
+  }
+  for (int c = 0; c < n; ++c) {
+    int p = c;
+    for (int r = c + 1; r < n; ++r)
+      if ((m[r][c] < 0 ? -m[r][c] : m[r][c]) > (m[p][c] < 0 ? -m[p][c] : m[p][c])) p = r;
+    if (p != c) {
+      for (int k = 0; k <= n; ++k) {
+        const Real t = m[c][k];
+        m[c][k] = m[p][k];
+        m[p][k] = t;
+      }
+      det = -det;
+    }
+    det *= m[c][c];
+    if (m[c][c] == Real(0)) break;
+    for (int r = c + 1; r < n; ++r) {
+      const Real fct = m[r][c] / m[c][c];
+      for (int k = c; k <= n; ++k) m[r][k] -= fct * m[c][k];
+    }
+  }
+  const Real rel = scale > Real(0) ? (det < 0 ? -det : det) / scale : Real(0);
+  if (!(rel > det_min)) return s.b[0] / s.shepard;  // Shepard fallback, zero gradient
+  Real x[4] = {0, 0, 0, 0};
+  for (int r = n - 1; r >= 0; --r) {
+    Real acc = m[r][n];
+    for (int c = r + 1; c < n; ++c) acc -= m[r][c] * x[c];
+    x[r] = acc / m[r][r];
+  }
+  Vec3 grad;
+  if (dim == 2) {
+    grad = Vec3(x[1], 0, x[2]);
+  } else {
+    grad = Vec3(x[1], x[2], x[3]);
+  }
+  return x[0] + dot(rb_minus_rg, grad);
+}
+
+// Boundary velocity for the viscous term: mirror of the ghost node's Shepard velocity about the
+// wall velocity. No-slip: v_B = 2 v_wall - v_G. Free-slip: only the normal part is mirrored.
+SPHDEM_HD inline Vec3 mdbc_boundary_velocity(const MdbcSums& s, const Vec3& v_wall,
+                                             const Vec3& normal, bool free_slip) {
+  if (s.shepard <= Real(0)) return v_wall;
+  const Vec3 vg = s.vel / s.shepard - v_wall;  // relative to the wall
+  if (!free_slip) return v_wall - vg;
+  const Vec3 vn = normal * dot(vg, normal);
+  return v_wall + (vg - vn) - vn;
+}
+
+}  // namespace sphdem
