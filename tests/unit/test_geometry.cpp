@@ -476,6 +476,48 @@ TEST_F(MeshFiles, ShiftedCubeOffGridAligned) {
   }
 }
 
+// A torus (not convex, with a hole) built in memory: the mesh SDF follows the analytic torus
+// SDF within interpolation plus faceting error, with the right sign, including in the hole.
+TEST(MeshSdf, TorusMatchesAnalytic) {
+  const int nu = 72, nv = 24;
+  const Real big_r = 0.7, small_r = 0.25;
+  geom::TriMesh m;
+  for (int i = 0; i < nu; ++i)
+    for (int j = 0; j < nv; ++j) {
+      const Real u = 2 * kPi * i / nu, v = 2 * kPi * j / nv;
+      m.vertices.push_back(Vec3((big_r + small_r * std::cos(v)) * std::cos(u),
+                                (big_r + small_r * std::cos(v)) * std::sin(u),
+                                small_r * std::sin(v)));
+    }
+  auto id = [&](int i, int j) { return (i % nu) * nv + (j % nv); };
+  for (int i = 0; i < nu; ++i)
+    for (int j = 0; j < nv; ++j) {
+      m.triangles.insert(m.triangles.end(), {id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      m.triangles.insert(m.triangles.end(), {id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+    }
+  auto torus = [&](const Vec3& x) {
+    const Real q = std::sqrt(x.x * x.x + x.y * x.y) - big_r;
+    return std::sqrt(q * q + x.z * x.z) - small_r;
+  };
+  const Real h = 0.04;
+  const auto s = geom::make_mesh_sdf(m, h, 3);
+  // Faceting: the polygon sagittas of the tube and of the outer ring.
+  const Real facet =
+      small_r * (1 - std::cos(kPi / nv)) + (big_r + small_r) * (1 - std::cos(kPi / nu));
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<Real> u(-1, 1);
+  for (int n = 0; n < 3000; ++n) {
+    const Vec3 x(1.05 * u(rng), 1.05 * u(rng), 0.35 * u(rng));
+    const Real e = torus(x);
+    EXPECT_NEAR(s->phi(x), e, 0.75 * h + facet) << x.x << " " << x.y << " " << x.z;
+    if (std::abs(e) > h + facet) {
+      EXPECT_EQ(s->phi(x) < 0, e < 0);
+    }
+  }
+  EXPECT_NEAR(s->phi(Vec3(0, 0, 0)), big_r - small_r, 0.01);           // centre of the hole
+  EXPECT_NEAR(s->phi(Vec3(big_r, 0, 0)), -small_r, 0.75 * h + facet);  // tube centre: a kink
+}
+
 TEST_F(MeshFiles, ObjBadIndexNamesFileAndLine) {
   std::ostringstream s;
   for (const Vec3& p : cube_vertices()) s << "v " << p.x << " " << p.y << " " << p.z << "\n";
