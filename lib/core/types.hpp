@@ -19,7 +19,7 @@ using GlobalId = std::uint64_t;  // particle id, unique over the whole run
 
 struct Vec3 {
   Real x = 0, y = 0, z = 0;
-  SPHDEM_HD constexpr Vec3() = default;
+  constexpr Vec3() = default;  // defaulted: usable on both sides without SPHDEM_HD
   SPHDEM_HD constexpr Vec3(Real a, Real b, Real c) : x(a), y(b), z(c) {}
   SPHDEM_HD Real operator[](int k) const { return k == 0 ? x : (k == 1 ? y : z); }
   SPHDEM_HD Real& operator[](int k) { return k == 0 ? x : (k == 1 ? y : z); }

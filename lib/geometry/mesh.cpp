@@ -516,8 +516,14 @@ std::vector<Real> unsigned_distances(const TriMesh& m, const Vec3& lo, Real h, c
     const int j = static_cast<int>(r % n[1]), k = static_cast<int>(r / n[1]);
     for (int i = 0; i < n[0]; ++i) {
       const std::size_t id = at(i, j, k);
-      if (near[id] || closest[id] < 0) continue;
+      if (near[id]) continue;
       const Vec3 p = lo + h * Vec3(Real(i), Real(j), Real(k));
+      if (closest[id] < 0) {  // not reached by the sweeps (not expected): query directly
+        int tri = -1;
+        dist[id] = bvh.distance(p, big, &tri);
+        closest[id] = tri;
+        continue;
+      }
       int t = closest[id];
       Real d2 = dist2_tri(m, t, p);
       for (int step = 0; step < ntri; ++step) {

@@ -1,0 +1,186 @@
+// Hydrostatic tank, 2D (FORMULAS.md §1): water at rest in an open tank must carry the pressure
+// p = rho0 g (H - z) and put the force rho0 g H L (per unit width) on the floor, without leaking
+// through the walls and without tripping a stability guard. A second case doubles gravity and
+// checks that the same comparator, against the original rho0 g H, fails.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "app/simulation.hpp"
+#include "core/error.hpp"
+#include "diagnostics/guards.hpp"
+#include "io/scene_yaml.hpp"
+
+namespace sphdem {
+namespace {
+
+// The coarsened tank: dp = 0.025 m puts 20 particle layers in the 0.5 m depth (40 x 20 = 800
+// fluid particles).
+constexpr double kDp = 0.025;
+constexpr double kDepth = 0.5;   // H: the block top, z = 0 is the floor
+constexpr double kLength = 1.0;  // L: inner length of the tank, 0 < x < L
+constexpr double kRho0 = 1000;
+constexpr double kG = 9.81;
+
+std::string tank_scene() { return std::string(SPHDEM_SOURCE_DIR) + "/inputs/hydrostatic_tank_2d.yaml"; }
+
+struct TankResult {
+  bool unstable = false;
+  std::string failure;
+  double t_end = 0;
+  std::int64_t steps = 0;
+  // Pressure: time-averaged particle pressure against p_ref(z) = rho0 g_ref (H - z), over fluid
+  // particles below the top three layers.
+  int n_compared = 0;
+  double p_max_rel = 0, p_rms_rel = 0;
+  double p_worst_z = 0;
+  // Floor: time-averaged sum of m a_z over the tank's boundary particles with z < 0, 0 < x < L,
+  // and over the whole tank.
+  double floor_fz = 0, tank_fz = 0, tank_fx = 0;
+  double floor_fz_min = 0, floor_fz_max = 0;  // extremes of the instantaneous floor force
+  // Leaks: fluid particles below the floor or outside the side walls at the end, and removed.
+  int below_floor = 0, outside_walls = 0;
+  Index removed = 0;
+  double wall_seconds = 0;
+};
+
+// Runs the tank to `t_end` with the stability guards of a normal run, averaging the pressure of
+// each particle (by id) and the floor force over the last `t_avg` seconds. The comparison is
+// against rho0 g_ref (H - z): g_ref is the gravity the comparator assumes, not the run's.
+TankResult run_tank(const std::vector<std::string>& overrides, double t_end, double t_avg,
+                    double g_ref) {
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<std::string> ov = {"sph.dp=" + std::to_string(kDp)};
+  ov.insert(ov.end(), overrides.begin(), overrides.end());
+  std::ostringstream te;
+  te << "time.end=" << t_end;
+  ov.push_back(te.str());
+  const Scene scene = load_scene(tank_scene(), ov);
+  std::ostringstream log;
+  auto solver = make_solver(scene, Backend::kHost, log);
+  const StepParams& p = solver->params();
+
+  TankResult r;
+  const std::size_t n_ids = std::size_t(solver->host_particles().size());
+  std::vector<double> p_sum(n_ids, 0), z_sum(n_ids, 0);
+  std::vector<int> count(n_ids, 0);
+  double floor_sum = 0, tank_sum = 0, tank_x_sum = 0;
+  int samples = 0;
+  r.floor_fz_min = 1e300;
+  r.floor_fz_max = -1e300;
+  try {
+    while (solver->time() < t_end) {
+      const StepStats st = solver->step();
+      check_step_guards(scene, p, st, solver->time(), solver->step_count());
+      const ParticleSet<Host>& ps = solver->host_particles();
+      check_particle_guards(scene, p, ps, solver->time(), solver->step_count());
+      if (solver->time() < t_end - t_avg) continue;
+      // Boundary accelerations are those of the step's rate evaluation (the state at t - dt).
+      double floor = 0, tank = 0, tank_x = 0;
+      for (Index i = ps.wall_begin(); i < ps.size(); ++i) {
+        if (ps.body[i] != 0) continue;
+        const double fz = double(ps.mass[i]) * double(ps.acc[i].z);
+        tank += fz;
+        tank_x += double(ps.mass[i]) * double(ps.acc[i].x);
+        if (ps.pos[i].z < 0 && ps.pos[i].x > 0 && ps.pos[i].x < kLength) floor += fz;
+      }
+      floor_sum += floor;
+      tank_sum += tank;
+      tank_x_sum += tank_x;
+      r.floor_fz_min = std::min(r.floor_fz_min, floor);
+      r.floor_fz_max = std::max(r.floor_fz_max, floor);
+      ++samples;
+      for (Index i = 0; i < ps.n_fluid; ++i) {
+        const std::size_t id = std::size_t(ps.id[i]);
+        p_sum[id] += double(ps.press[i]);
+        z_sum[id] += double(ps.pos[i].z);
+        ++count[id];
+      }
+    }
+  } catch (const StabilityError& e) {
+    r.unstable = true;
+    r.failure = e.what();
+  }
+  r.t_end = double(solver->time());
+  r.steps = solver->step_count();
+  r.removed = solver->removed_count();
+  if (samples > 0) {
+    r.floor_fz = floor_sum / samples;
+    r.tank_fz = tank_sum / samples;
+    r.tank_fx = tank_x_sum / samples;
+  }
+  double sq = 0;
+  for (std::size_t id = 0; id < n_ids; ++id) {
+    if (count[id] == 0) continue;
+    const double z = z_sum[id] / count[id], pm = p_sum[id] / count[id];
+    if (z > kDepth - 3 * kDp) continue;  // the top three layers
+    const double ref = kRho0 * g_ref * (kDepth - z);
+    const double rel = std::abs(pm - ref) / ref;
+    if (rel > r.p_max_rel) {
+      r.p_max_rel = rel;
+      r.p_worst_z = z;
+    }
+    sq += rel * rel;
+    ++r.n_compared;
+    if (getenv("HS_DEBUG") && rel > 0.015) std::printf("  id %zu z %.4f p %.1f ref %.1f rel %.4f\n", id, z, pm, ref, (pm-ref)/ref);
+  }
+  if (r.n_compared > 0) r.p_rms_rel = std::sqrt(sq / r.n_compared);
+  const ParticleSet<Host>& ps = solver->host_particles();
+  for (Index i = 0; i < ps.n_fluid; ++i) {
+    if (ps.pos[i].z < 0) ++r.below_floor;
+    if (ps.pos[i].x < 0 || ps.pos[i].x > kLength) ++r.outside_walls;
+  }
+  r.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return r;
+}
+
+// The expected floor force per unit width, downward: the weight of the water.
+double floor_force_expected(double g) { return -kRho0 * g * kDepth * kLength; }
+
+TEST(Hydrostatic, TankPressureAndFloorForce) {
+  const TankResult r = run_tank({}, atof(getenv("HS_T")), atof(getenv("HS_A")), kG);
+  std::printf(
+      "hydrostatic tank dp = %g (%d layers): t = %.3f s, %lld steps, %.1f s wall\n"
+      "  pressure vs rho0 g (H - z) below the top 3 layers: %d particles, max rel %.4f (at z = "
+      "%.3f), rms rel %.4f\n"
+      "  floor force (z < 0, 0 < x < L) %.2f N/m [%.2f, %.2f] vs %.2f: rel %.4f; whole tank fz "
+      "%.2f (rel %.4f), fx %.3f\n"
+      "  leaks: %d below the floor, %d outside the walls, %lld removed\n",
+      kDp, int(std::lround(kDepth / kDp)), r.t_end, (long long)r.steps, r.wall_seconds,
+      r.n_compared, r.p_max_rel, r.p_worst_z, r.p_rms_rel, r.floor_fz, r.floor_fz_min,
+      r.floor_fz_max, floor_force_expected(kG),
+      std::abs(r.floor_fz / floor_force_expected(kG) - 1), r.tank_fz,
+      std::abs(r.tank_fz / floor_force_expected(kG) - 1), r.tank_fx, r.below_floor,
+      r.outside_walls, (long long)r.removed);
+  ASSERT_FALSE(r.unstable) << r.failure;
+  EXPECT_GT(r.n_compared, 600);
+  EXPECT_LT(r.p_max_rel, 0.03);
+  EXPECT_NEAR(r.floor_fz / floor_force_expected(kG), 1.0, 0.02);
+  EXPECT_EQ(r.below_floor, 0);
+  EXPECT_EQ(r.outside_walls, 0);
+  EXPECT_EQ(r.removed, 0);
+}
+
+// A perturbed input must make the comparator fail (DESIGN.md §8): with gravity doubled the
+// pressure and the floor force are about twice the original rho0 g (H - z) and rho0 g H L.
+TEST(Hydrostatic, ComparatorFailsWithDoubledGravity) {
+  const TankResult r = run_tank({"gravity=[0,0,-19.62]"}, 0.3, 0.1, kG);
+  std::printf(
+      "hydrostatic tank, gravity doubled, compared with g = %.2f: max rel pressure error %.3f, "
+      "rms %.3f; floor force %.1f vs %.1f (ratio %.3f); %.1f s wall\n",
+      kG, r.p_max_rel, r.p_rms_rel, r.floor_fz, floor_force_expected(kG),
+      r.floor_fz / floor_force_expected(kG), r.wall_seconds);
+  ASSERT_FALSE(r.unstable) << r.failure;
+  EXPECT_GT(r.p_rms_rel, 0.5);
+  EXPECT_GT(r.p_max_rel, 0.03);
+  EXPECT_GT(std::abs(r.floor_fz / floor_force_expected(kG) - 1), 0.5);
+}
+
+}  // namespace
+}  // namespace sphdem
