@@ -61,9 +61,10 @@ void run_bench(const BenchOptions& opt, std::ostream& os) {
        << ",\n  \"particle_steps_per_second\": " << n * steps / wall << ",\n  \"phases\": {";
     bool first = true;
     for (const Row& r : rows) {
-      os << (first ? "\n" : ",\n") << "    \"" << r.name << "\": {\"seconds_per_step\": "
-         << r.seconds / steps << ", \"pips\": "
-         << (r.neighbour_pass && r.seconds > 0 ? pairs * steps / r.seconds : 0) << "}";
+      os << (first ? "\n" : ",\n") << "    \"" << r.name
+         << "\": {\"seconds_per_step\": " << r.seconds / steps
+         << ", \"pips\": " << (r.neighbour_pass && r.seconds > 0 ? pairs * steps / r.seconds : 0)
+         << "}";
       first = false;
     }
     os << "\n  }\n}\n";
@@ -75,16 +76,19 @@ void run_bench(const BenchOptions& opt, std::ostream& os) {
      << host_thread_count() << " threads), " << steps << " steps after " << opt.warmup
      << " warm-up\n";
   os << std::left << std::setw(14) << "phase" << std::right << std::setw(14) << "ms/step"
-     << std::setw(18) << "particle-steps/s" << std::setw(14) << "PIPS" << "\n";
+     << std::setw(18) << "particle-steps/s" << std::setw(14) << "PIPS"
+     << "\n";
   for (const Row& r : rows) {
     const double ms = 1e3 * r.seconds / steps;
-    os << std::left << std::setw(14) << r.name << std::right << std::setw(14) << std::setprecision(4)
-       << ms << std::setw(18) << (r.seconds > 0 ? n * steps / r.seconds : 0) << std::setw(14)
-       << (r.neighbour_pass && r.seconds > 0 ? pairs * steps / r.seconds : 0) << "\n";
+    os << std::left << std::setw(14) << r.name << std::right << std::setw(14)
+       << std::setprecision(4) << ms << std::setw(18) << (r.seconds > 0 ? n * steps / r.seconds : 0)
+       << std::setw(14) << (r.neighbour_pass && r.seconds > 0 ? pairs * steps / r.seconds : 0)
+       << "\n";
   }
   os << std::left << std::setw(14) << "total" << std::right << std::setw(14) << 1e3 * wall / steps
      << std::setw(18) << n * steps / wall << std::setw(14) << pairs * steps / wall << "\n";
-  os << "neighbour pairs within 2h per step: " << pairs << " (" << pairs / n << " per fluid particle)\n";
+  os << "neighbour pairs within 2h per step: " << pairs << " (" << pairs / n
+     << " per fluid particle)\n";
 }
 
 }  // namespace sphdem

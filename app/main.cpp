@@ -20,7 +20,9 @@ void print_info(std::ostream& os) {
   os << "sphdem " << SPHDEM_VERSION << "\n"
      << "  precision:      " << SPHDEM_PRECISION_NAME << "\n"
      << "  host space:     OpenMP, " << host_thread_count() << " threads\n"
-     << "  CUDA:           " << (cuda::compiled_with_cuda() ? "compiled, architectures " SPHDEM_CUDA_ARCHS : "not compiled") << "\n"
+     << "  CUDA:           "
+     << (cuda::compiled_with_cuda() ? "compiled, architectures " SPHDEM_CUDA_ARCHS : "not compiled")
+     << "\n"
      << "  PETSc:          " << petsc_version() << "\n"
      << "  MPI:            " << mpi_version() << "\n"
      << "  HDF5:           " << hdf5_version() << "\n"
@@ -62,7 +64,8 @@ int main(int argc, char** argv) {
   bo.scene_path = std::string(SPHDEM_SOURCE_DIR) + "/inputs/dam_break_3d.yaml";
   long long particles = 0;
   auto* bench = app.add_subcommand("bench", "time a scene per phase");
-  bench->add_option("scene", bo.scene_path, "scene file (default: dam_break_3d)")->capture_default_str();
+  bench->add_option("scene", bo.scene_path, "scene file (default: dam_break_3d)")
+      ->capture_default_str();
   bench->add_option("--particles", particles, "scale dp to about this many fluid particles");
   bench->add_option("--steps", bo.steps, "timed steps")->capture_default_str();
   bench->add_option("--warmup", bo.warmup, "untimed steps first")->capture_default_str();

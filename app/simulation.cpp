@@ -31,7 +31,8 @@ std::unique_ptr<SolverBase> make_solver(const Scene& scene, Backend backend, std
   ParticleSet<Host> ps = build_particles(scene, &rep);
   if (report) *report = rep;
   const Real c0 = resolve_sound_speed(scene, rep);
-  if (rep.fluid == 0) throw InputError(scene.source + ": fluid_blocks: the scene holds no fluid particles");
+  if (rep.fluid == 0)
+    throw InputError(scene.source + ": fluid_blocks: the scene holds no fluid particles");
   bool device = false;
   if (backend != Backend::kHost) {
     std::string why;
@@ -42,7 +43,8 @@ std::unique_ptr<SolverBase> make_solver(const Scene& scene, Backend backend, std
     } else if (backend == Backend::kDevice) {
       throw InputError("--backend device: no usable GPU (" + why + ")");
     } else {
-      log << "backend: host, " << host_thread_count() << " OpenMP threads (no GPU: " << why << ")\n";
+      log << "backend: host, " << host_thread_count() << " OpenMP threads (no GPU: " << why
+          << ")\n";
     }
   } else {
     log << "backend: host, " << host_thread_count() << " OpenMP threads\n";
@@ -69,12 +71,18 @@ class DiagnosticWriter {
  public:
   DiagnosticWriter(const Scene& s, const std::string& dir) : scene_(s) {
     const Diagnostics& d = s.diagnostics;
-    for (const auto& g : d.pressure_gauges) pressure_.emplace_back(dir + "/" + g.name + ".csv", std::vector<std::string>{"t", "p"});
-    for (const auto& g : d.height_gauges) height_.emplace_back(dir + "/" + g.name + ".csv", std::vector<std::string>{"t", "h"});
-    for (const auto& g : d.fronts) front_.emplace_back(dir + "/" + g.name + ".csv", std::vector<std::string>{"t", "x_front"});
-    for (const auto& g : d.forces) force_.emplace_back(dir + "/" + g.name + ".csv", std::vector<std::string>{"t", "fx", "fy", "fz"});
+    for (const auto& g : d.pressure_gauges)
+      pressure_.emplace_back(dir + "/" + g.name + ".csv", std::vector<std::string>{"t", "p"});
+    for (const auto& g : d.height_gauges)
+      height_.emplace_back(dir + "/" + g.name + ".csv", std::vector<std::string>{"t", "h"});
+    for (const auto& g : d.fronts)
+      front_.emplace_back(dir + "/" + g.name + ".csv", std::vector<std::string>{"t", "x_front"});
+    for (const auto& g : d.forces)
+      force_.emplace_back(dir + "/" + g.name + ".csv",
+                          std::vector<std::string>{"t", "fx", "fy", "fz"});
     for (const auto& g : d.profiles) {
-      profile_.emplace_back(dir + "/" + g.name + ".csv", std::vector<std::string>{"t", "s", "x", "y", "z_surface"});
+      profile_.emplace_back(dir + "/" + g.name + ".csv",
+                            std::vector<std::string>{"t", "s", "x", "y", "z_surface"});
       profile_next_.push_back(0);
     }
     if (d.energy) energy_.open(dir + "/energy.csv", {"t", "kinetic", "potential", "total"});
@@ -174,7 +182,8 @@ void write_summary(const std::string& path, const Scene& scene, const RunResult&
     << "  \"status\": \"" << (r.unstable ? "unstable" : "completed") << "\"";
   if (r.unstable) {
     std::string msg;
-    for (char c : r.failure) msg += (c == '"' || c == '\\') ? std::string("\\") + c : std::string(1, c);
+    for (char c : r.failure)
+      msg += (c == '"' || c == '\\') ? std::string("\\") + c : std::string(1, c);
     f << ",\n  \"failure\": \"" << msg << "\"";
   }
   f << "\n}\n";
@@ -186,7 +195,8 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
   namespace fs = std::filesystem;
   std::error_code ec;
   fs::create_directories(opt.out_dir, ec);
-  if (ec) throw InputError("--out: cannot create output folder '" + opt.out_dir + "': " + ec.message());
+  if (ec)
+    throw InputError("--out: cannot create output folder '" + opt.out_dir + "': " + ec.message());
   Log log(opt.out_dir + "/run.log", opt.quiet);
   {
     std::ofstream y(opt.out_dir + "/scene.yaml");
@@ -200,7 +210,8 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
   log << slog.str();
   const StepParams& p = solver->params();
   log << "particles: " << rep.fluid << " fluid, " << rep.wall << " wall boundary, " << rep.grain
-      << " grain boundary; dp = " << p.dp << " m, h = " << p.h << " m, c0 = " << p.eos.c0 << " m/s\n";
+      << " grain boundary; dp = " << p.dp << " m, h = " << p.h << " m, c0 = " << p.eos.c0
+      << " m/s\n";
 
   RunResult r;
   r.fluid = rep.fluid;
@@ -226,10 +237,13 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
       const StepStats st = solver->step();
       ++steps;
       particle_steps += double(solver->host_particles().n_fluid);
-      if (st.removed > 0) log << "t = " << solver->time() << " s: " << st.removed << " fluid particles left the domain\n";
+      if (st.removed > 0)
+        log << "t = " << solver->time() << " s: " << st.removed
+            << " fluid particles left the domain\n";
       check_step_guards(scene, p, st, solver->time(), solver->step_count());
       if (scene.guards.check_every > 0 && steps % scene.guards.check_every == 0)
-        check_particle_guards(scene, p, solver->host_particles(), solver->time(), solver->step_count());
+        check_particle_guards(scene, p, solver->host_particles(), solver->time(),
+                              solver->step_count());
       const auto now = clock::now();
       const double since = std::chrono::duration<double>(now - last_progress).count();
       if (!opt.quiet && (since > (tty ? 0.25 : opt.progress_every_s))) {
@@ -238,9 +252,10 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
         const double rate = steps / wall;
         const double eta = (end - solver->time()) / st.dt / rate;
         std::ostringstream line;
-        line << "t = " << std::setprecision(4) << solver->time() << " s, dt = " << std::setprecision(3)
-             << st.dt << " s, step " << solver->step_count() << ", " << std::setprecision(3) << rate
-             << " steps/s, " << particle_steps / wall << " particle-steps/s, ETA " << fmt_duration(eta);
+        line << "t = " << std::setprecision(4) << solver->time()
+             << " s, dt = " << std::setprecision(3) << st.dt << " s, step " << solver->step_count()
+             << ", " << std::setprecision(3) << rate << " steps/s, " << particle_steps / wall
+             << " particle-steps/s, ETA " << fmt_duration(eta);
         if (tty) {
           std::cout << "\r" << line.str() << "   " << std::flush;
         } else {
@@ -253,10 +268,12 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
   } catch (const StabilityError& e) {
     r.unstable = true;
     r.failure = e.what();
-    const std::string dump = opt.out_dir + "/emergency_step" + std::to_string(solver->step_count()) + ".csv";
+    const std::string dump =
+        opt.out_dir + "/emergency_step" + std::to_string(solver->step_count()) + ".csv";
     write_state_csv(solver->host_particles(), dump);
     if (tty) std::cout << "\n";
-    log << "ERROR: " << e.what() << "\n" << "emergency state written to " << dump << "\n";
+    log << "ERROR: " << e.what() << "\n"
+        << "emergency state written to " << dump << "\n";
   }
   if (tty && !r.unstable) std::cout << "\n";
   r.steps = steps;
@@ -296,8 +313,8 @@ void check_scene(const Scene& scene, std::ostream& os) {
   os << "scene '" << scene.name << "' (" << scene.source << "), " << scene.dim << "D\n"
      << "particles: fluid " << rep.fluid << ", wall boundary " << rep.wall << ", grain boundary "
      << rep.grain << ", total " << ps.size() << "\n"
-     << "dp = " << p.dp << " m, h = " << p.h << " m, c0 = " << c0 << " m/s, cells "
-     << p.grid.n[0] << " x " << p.grid.n[1] << " x " << p.grid.n[2] << "\n"
+     << "dp = " << p.dp << " m, h = " << p.h << " m, c0 = " << c0 << " m/s, cells " << p.grid.n[0]
+     << " x " << p.grid.n[1] << " x " << p.grid.n[2] << "\n"
      << "memory estimate: " << std::setprecision(3) << mem / 1048576.0 << " MiB\n"
      << "time step estimate: " << dt << " s (force " << dt_f << ", acoustic " << dt_cv
      << ", viscous " << dt_v << "; CFL " << scene.time.cfl << ")\n"

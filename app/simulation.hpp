@@ -19,9 +19,9 @@ Backend parse_backend(const std::string& s);
 struct RunOptions {
   std::string out_dir = "out";
   Backend backend = Backend::kAuto;
-  std::int64_t max_steps = -1;   // stop after this many steps (bench, tests); -1 = to time.end
-  bool quiet = false;            // no progress lines
-  double progress_every_s = 2.0; // wall seconds between progress lines when not on a TTY
+  std::int64_t max_steps = -1;    // stop after this many steps (bench, tests); -1 = to time.end
+  bool quiet = false;             // no progress lines
+  double progress_every_s = 2.0;  // wall seconds between progress lines when not on a TTY
 };
 
 struct RunResult {
@@ -33,8 +33,8 @@ struct RunResult {
   double removed_mass = 0;
   double particle_steps_per_second = 0;
   bool unstable = false;
-  std::string failure;           // the guard's message when unstable
-  std::string space;             // host or device
+  std::string failure;  // the guard's message when unstable
+  std::string space;    // host or device
 };
 
 // Creates the solver for the backend (auto: the device if a GPU is seen, else the host, and

@@ -4,7 +4,9 @@
 
 namespace sphdem::cuda {
 
-bool compiled_with_cuda() { return false; }
+bool compiled_with_cuda() {
+  return false;
+}
 std::vector<GpuInfo> list_gpus(std::string* why) {
   if (why) *why = "built without CUDA (SPHDEM_ENABLE_CUDA=OFF)";
   return {};
@@ -14,12 +16,22 @@ namespace {
   throw RuntimeFault("sphdem was built without CUDA (SPHDEM_ENABLE_CUDA=OFF)");
 }
 }  // namespace
-void select_device(int) { unavailable(); }
-void* device_alloc(std::size_t) { unavailable(); }
+void select_device(int) {
+  unavailable();
+}
+void* device_alloc(std::size_t) {
+  unavailable();
+}
 void device_free(void*) noexcept {}
-void copy_to_device(void*, const void*, std::size_t) { unavailable(); }
-void copy_to_host(void*, const void*, std::size_t) { unavailable(); }
-void copy_device_to_device(void*, const void*, std::size_t) { unavailable(); }
+void copy_to_device(void*, const void*, std::size_t) {
+  unavailable();
+}
+void copy_to_host(void*, const void*, std::size_t) {
+  unavailable();
+}
+void copy_device_to_device(void*, const void*, std::size_t) {
+  unavailable();
+}
 void synchronize() {}
 
 }  // namespace sphdem::cuda

@@ -21,7 +21,9 @@ void check_cuda(cudaError_t e, const char* what) {
 namespace cuda {
 using detail::check_cuda;
 
-bool compiled_with_cuda() { return true; }
+bool compiled_with_cuda() {
+  return true;
+}
 
 std::vector<GpuInfo> list_gpus(std::string* why) {
   std::vector<GpuInfo> out;
@@ -51,7 +53,9 @@ std::vector<GpuInfo> list_gpus(std::string* why) {
   return out;
 }
 
-void select_device(int index) { check_cuda(cudaSetDevice(index), "cudaSetDevice"); }
+void select_device(int index) {
+  check_cuda(cudaSetDevice(index), "cudaSetDevice");
+}
 
 void* device_alloc(std::size_t bytes) {
   void* p = nullptr;
@@ -71,7 +75,9 @@ void copy_to_host(void* dst, const void* src, std::size_t bytes) {
 void copy_device_to_device(void* dst, const void* src, std::size_t bytes) {
   check_cuda(cudaMemcpy(dst, src, bytes, cudaMemcpyDeviceToDevice), "copy on device");
 }
-void synchronize() { check_cuda(cudaDeviceSynchronize(), "synchronize"); }
+void synchronize() {
+  check_cuda(cudaDeviceSynchronize(), "synchronize");
+}
 }  // namespace cuda
 
 void sort_pairs_stable(Device, std::uint64_t* keys, std::uint32_t* values, Index n,

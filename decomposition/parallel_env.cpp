@@ -18,7 +18,9 @@ ParallelEnv::ParallelEnv(int* argc, char*** argv) {
   MPI_Comm_free(&local);
 }
 
-ParallelEnv::~ParallelEnv() { PetscFinalize(); }
+ParallelEnv::~ParallelEnv() {
+  PetscFinalize();
+}
 
 std::string petsc_version() {
   char buf[256];

@@ -12,7 +12,9 @@ namespace sphdem {
 class CsvSeries {
  public:
   CsvSeries() = default;
-  CsvSeries(const std::string& path, const std::vector<std::string>& columns) { open(path, columns); }
+  CsvSeries(const std::string& path, const std::vector<std::string>& columns) {
+    open(path, columns);
+  }
   CsvSeries(const CsvSeries&) = delete;
   CsvSeries& operator=(const CsvSeries&) = delete;
   CsvSeries(CsvSeries&& o) noexcept : f_(o.f_), path_(std::move(o.path_)) { o.f_ = nullptr; }

@@ -14,7 +14,7 @@ using Real = float;
 using Real = double;
 #endif
 
-using Index = std::int64_t;     // particle index on a rank
+using Index = std::int64_t;      // particle index on a rank
 using GlobalId = std::uint64_t;  // particle id, unique over the whole run
 
 struct Vec3 {
@@ -43,18 +43,36 @@ struct Vec3 {
   }
 };
 
-SPHDEM_HD inline Vec3 operator+(Vec3 a, const Vec3& b) { return a += b; }
-SPHDEM_HD inline Vec3 operator-(Vec3 a, const Vec3& b) { return a -= b; }
-SPHDEM_HD inline Vec3 operator-(const Vec3& a) { return Vec3(-a.x, -a.y, -a.z); }
-SPHDEM_HD inline Vec3 operator*(Vec3 a, Real s) { return a *= s; }
-SPHDEM_HD inline Vec3 operator*(Real s, Vec3 a) { return a *= s; }
-SPHDEM_HD inline Vec3 operator/(const Vec3& a, Real s) { return Vec3(a.x / s, a.y / s, a.z / s); }
-SPHDEM_HD inline Real dot(const Vec3& a, const Vec3& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+SPHDEM_HD inline Vec3 operator+(Vec3 a, const Vec3& b) {
+  return a += b;
+}
+SPHDEM_HD inline Vec3 operator-(Vec3 a, const Vec3& b) {
+  return a -= b;
+}
+SPHDEM_HD inline Vec3 operator-(const Vec3& a) {
+  return Vec3(-a.x, -a.y, -a.z);
+}
+SPHDEM_HD inline Vec3 operator*(Vec3 a, Real s) {
+  return a *= s;
+}
+SPHDEM_HD inline Vec3 operator*(Real s, Vec3 a) {
+  return a *= s;
+}
+SPHDEM_HD inline Vec3 operator/(const Vec3& a, Real s) {
+  return Vec3(a.x / s, a.y / s, a.z / s);
+}
+SPHDEM_HD inline Real dot(const Vec3& a, const Vec3& b) {
+  return a.x * b.x + a.y * b.y + a.z * b.z;
+}
 SPHDEM_HD inline Vec3 cross(const Vec3& a, const Vec3& b) {
   return Vec3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
 }
-SPHDEM_HD inline Real norm2(const Vec3& a) { return dot(a, a); }
-SPHDEM_HD inline Real norm(const Vec3& a) { return std::sqrt(dot(a, a)); }
+SPHDEM_HD inline Real norm2(const Vec3& a) {
+  return dot(a, a);
+}
+SPHDEM_HD inline Real norm(const Vec3& a) {
+  return std::sqrt(dot(a, a));
+}
 
 constexpr Real kPi = Real(3.14159265358979323846);
 

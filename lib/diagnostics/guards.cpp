@@ -15,7 +15,9 @@ namespace {
   if (!hint.empty()) os << ". " << hint;
   throw StabilityError(os.str());
 }
-bool finite(const Vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+bool finite(const Vec3& v) {
+  return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
 }  // namespace
 
 void check_step_guards(const Scene& scene, const StepParams& p, const StepStats& st, Real time,
@@ -42,11 +44,12 @@ void check_step_guards(const Scene& scene, const StepParams& p, const StepStats&
     fail("Mach number too high", time, step, d.str(),
          "Raise fluid.c0 (or fluid.c0_factor) so the fluid stays weakly compressible");
   }
-  const Real lo = scene.guards.rho_min_ratio * p.eos.rho0, hi = scene.guards.rho_max_ratio * p.eos.rho0;
+  const Real lo = scene.guards.rho_min_ratio * p.eos.rho0,
+             hi = scene.guards.rho_max_ratio * p.eos.rho0;
   if (st.rho_min < lo || st.rho_max > hi) {
     std::ostringstream d;
-    d << "fluid density range [" << st.rho_min << ", " << st.rho_max << "] kg/m^3 leaves ["
-      << lo << ", " << hi << "] (guards.rho_min_ratio/rho_max_ratio times rho0)";
+    d << "fluid density range [" << st.rho_min << ", " << st.rho_max << "] kg/m^3 leaves [" << lo
+      << ", " << hi << "] (guards.rho_min_ratio/rho_max_ratio times rho0)";
     fail("density out of bounds", time, step, d.str(),
          "Check density diffusion (fluid.diffusion), the CFL number and c0");
   }
@@ -54,7 +57,8 @@ void check_step_guards(const Scene& scene, const StepParams& p, const StepStats&
 
 void check_particle_guards(const Scene& scene, const StepParams& p, const ParticleSet<Host>& ps,
                            Real time, std::int64_t step) {
-  const Real lo = scene.guards.rho_min_ratio * p.eos.rho0, hi = scene.guards.rho_max_ratio * p.eos.rho0;
+  const Real lo = scene.guards.rho_min_ratio * p.eos.rho0,
+             hi = scene.guards.rho_max_ratio * p.eos.rho0;
   for (Index i = 0; i < ps.n_fluid; ++i) {
     if (!finite(ps.pos[i]) || !finite(ps.vel[i]) || !std::isfinite(ps.rho[i])) {
       std::ostringstream d;
@@ -64,8 +68,8 @@ void check_particle_guards(const Scene& scene, const StepParams& p, const Partic
     }
     if (ps.rho[i] < lo || ps.rho[i] > hi) {
       std::ostringstream d;
-      d << "fluid particle id " << ps.id[i] << " has density " << ps.rho[i]
-        << " kg/m^3, outside [" << lo << ", " << hi << "]";
+      d << "fluid particle id " << ps.id[i] << " has density " << ps.rho[i] << " kg/m^3, outside ["
+        << lo << ", " << hi << "]";
       fail("density out of bounds", time, step, d.str(),
            "Check density diffusion (fluid.diffusion), the CFL number and c0");
     }

@@ -23,15 +23,17 @@ CellGrid make_cell_grid(int dim, Vec3 lo, Vec3 hi, Real min_cell, const bool per
     }
     if (!(len > 0)) {
       std::ostringstream os;
-      os << "domain has zero or negative length along axis " << "xyz"[k];
+      os << "domain has zero or negative length along axis "
+         << "xyz"[k];
       throw InputError(os.str());
     }
     if (g.periodic[k]) {
       g.n[k] = int(std::floor(len / min_cell));
       if (g.n[k] < 3) {
         std::ostringstream os;
-        os << "periodic axis " << "xyz"[k] << " of length " << len
-           << " m holds fewer than 3 cells of " << min_cell << " m";
+        os << "periodic axis "
+           << "xyz"[k] << " of length " << len << " m holds fewer than 3 cells of " << min_cell
+           << " m";
         throw InputError(os.str());
       }
       g.cell[k] = len / g.n[k];

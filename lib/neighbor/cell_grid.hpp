@@ -14,12 +14,12 @@
 namespace sphdem {
 
 struct CellGrid {
-  int dim = 3;                   // 2 (x-z plane) or 3
-  Vec3 lo;                       // lower corner of the grid
-  Vec3 cell;                     // cell edge along each axis (>= search radius)
-  int n[3] = {1, 1, 1};          // cells along x, y, z
+  int dim = 3;           // 2 (x-z plane) or 3
+  Vec3 lo;               // lower corner of the grid
+  Vec3 cell;             // cell edge along each axis (>= search radius)
+  int n[3] = {1, 1, 1};  // cells along x, y, z
   bool periodic[3] = {false, false, false};
-  Vec3 period;                   // domain length along periodic axes
+  Vec3 period;  // domain length along periodic axes
 
   SPHDEM_HD std::uint64_t cell_count() const {
     return std::uint64_t(n[0]) * std::uint64_t(n[1]) * std::uint64_t(n[2]);

@@ -15,10 +15,10 @@ namespace sphdem {
 
 template <class Space>
 struct CellList {
-  Index begin = 0, count = 0;            // the slots this list covers
+  Index begin = 0, count = 0;               // the slots this list covers
   Buffer<std::uint32_t, Space> start, end;  // per cell, absolute slot indices
-  Buffer<std::uint64_t, Space> keys;     // sorted cell key of each slot in the range
-  Buffer<std::uint32_t, Space> order;    // source slot (relative to begin) of each sorted slot
+  Buffer<std::uint64_t, Space> keys;        // sorted cell key of each slot in the range
+  Buffer<std::uint32_t, Space> order;       // source slot (relative to begin) of each sorted slot
 
   CellListView view() const { return CellListView{start.data(), end.data()}; }
 };
@@ -33,13 +33,15 @@ void sort_cells(Space s, const CellGrid& g, const Vec3* pos, const GlobalId* id,
   cl.order.resize(std::size_t(count));
   std::uint64_t* keys = cl.keys.data();
   std::uint32_t* order = cl.order.data();
-  for_each(s, count, SPHDEM_LAMBDA(Index i) {
-    keys[i] = std::uint64_t(id[begin + i]);
-    order[i] = std::uint32_t(i);
-  });
+  for_each(
+      s, count, SPHDEM_LAMBDA(Index i) {
+        keys[i] = std::uint64_t(id[begin + i]);
+        order[i] = std::uint32_t(i);
+      });
   sort_pairs_stable(s, keys, order, count, std::uint64_t(max_id));
   const CellGrid grid = g;
-  for_each(s, count, SPHDEM_LAMBDA(Index i) { keys[i] = grid.key_of(pos[begin + order[i]]); });
+  for_each(
+      s, count, SPHDEM_LAMBDA(Index i) { keys[i] = grid.key_of(pos[begin + order[i]]); });
   sort_pairs_stable(s, keys, order, count, grid.cell_count() - 1);
 }
 
@@ -53,8 +55,10 @@ void permute_range(Space s, Buffer<T, Space>& field, const CellList<Space>& cl,
   T* f = field.data();
   T* t = scratch.data();
   const std::uint32_t* order = cl.order.data();
-  for_each(s, count, SPHDEM_LAMBDA(Index i) { t[i] = f[begin + order[i]]; });
-  for_each(s, count, SPHDEM_LAMBDA(Index i) { f[begin + i] = t[i]; });
+  for_each(
+      s, count, SPHDEM_LAMBDA(Index i) { t[i] = f[begin + order[i]]; });
+  for_each(
+      s, count, SPHDEM_LAMBDA(Index i) { f[begin + i] = t[i]; });
 }
 
 // Step 3: fills start/end for every cell from the sorted keys.
@@ -65,17 +69,19 @@ void mark_cells(Space s, const CellGrid& g, CellList<Space>& cl) {
   cl.end.resize(std::size_t(ncell));
   std::uint32_t* st = cl.start.data();
   std::uint32_t* en = cl.end.data();
-  for_each(s, ncell, SPHDEM_LAMBDA(Index c) {
-    st[c] = 0;
-    en[c] = 0;
-  });
+  for_each(
+      s, ncell, SPHDEM_LAMBDA(Index c) {
+        st[c] = 0;
+        en[c] = 0;
+      });
   const std::uint64_t* keys = cl.keys.data();
   const Index begin = cl.begin, count = cl.count;
-  for_each(s, count, SPHDEM_LAMBDA(Index i) {
-    const std::uint64_t k = keys[i];
-    if (i == 0 || keys[i - 1] != k) st[k] = std::uint32_t(begin + i);
-    if (i == count - 1 || keys[i + 1] != k) en[k] = std::uint32_t(begin + i + 1);
-  });
+  for_each(
+      s, count, SPHDEM_LAMBDA(Index i) {
+        const std::uint64_t k = keys[i];
+        if (i == 0 || keys[i - 1] != k) st[k] = std::uint32_t(begin + i);
+        if (i == count - 1 || keys[i + 1] != k) en[k] = std::uint32_t(begin + i + 1);
+      });
 }
 
 }  // namespace sphdem

@@ -66,7 +66,8 @@ ParticleSet<Host> build_particles(const Scene& scene, BuildReport* report) {
     // The block's free surface: its highest corner along -g.
     Real top = -1e30, bottom = 1e30;
     for (int c = 0; c < 8; ++c) {
-      const Vec3 corner((c & 1) ? b.hi.x : b.lo.x, (c & 2) ? b.hi.y : b.lo.y, (c & 4) ? b.hi.z : b.lo.z);
+      const Vec3 corner((c & 1) ? b.hi.x : b.lo.x, (c & 2) ? b.hi.y : b.lo.y,
+                        (c & 4) ? b.hi.z : b.lo.z);
       const Real up = -dot(corner, ghat);
       top = std::max(top, up);
       bottom = std::min(bottom, up);
@@ -140,7 +141,8 @@ ParticleSet<Host> build_particles(const Scene& scene, BuildReport* report) {
   for (Index i = 0; i < ps.n_fluid; ++i) {
     const Real surf = fsurface[std::size_t(i)];
     Real p = 0;
-    if (surf > Real(-1e29)) p = scene.fluid.rho0 * gmag * std::max(Real(0), surf - (-dot(ps.pos[i], ghat)));
+    if (surf > Real(-1e29))
+      p = scene.fluid.rho0 * gmag * std::max(Real(0), surf - (-dot(ps.pos[i], ghat)));
     ps.rho[i] = tait_density(e, p);
     ps.rho_prev[i] = ps.rho[i];
     ps.press[i] = p;

@@ -23,35 +23,37 @@ struct NeighborLists {
 // p = Tait(rho) for slots [begin, end).
 template <class Space>
 void compute_pressure(Space s, ParticleView v, Index begin, Index end, EosParams eos) {
-  for_each(s, end - begin, SPHDEM_LAMBDA(Index k) {
-    const Index i = begin + k;
-    v.press[i] = tait_pressure(eos, v.rho[i]);
-  });
+  for_each(
+      s, end - begin, SPHDEM_LAMBDA(Index k) {
+        const Index i = begin + k;
+        v.press[i] = tait_pressure(eos, v.rho[i]);
+      });
 }
 
 // mDBC: boundary density from the ghost-node interpolation over fluid, and the boundary velocity
 // for the viscous term. Boundary slots [begin, end); v.vel holds the solid's own velocity.
 template <class Space>
 void update_mdbc(Space s, ParticleView v, NeighborLists nl, StepParams p, Index begin, Index end) {
-  for_each(s, end - begin, SPHDEM_LAMBDA(Index k) {
-    const Index b = begin + k;
-    const Vec3 rg = v.ghost[b];
-    MdbcSums sums;
-    for_each_neighbor(p.grid, nl.fluid, v.pos, rg, p.radius2,
-                      [&](Index j, const Vec3& r_gj, Real r2) {
-                        const Real r = std::sqrt(r2);
-                        const Vec3 d = -r_gj;  // r_j - r_G
-                        mdbc_accumulate(sums, v.mass[j] / v.rho[j], v.rho[j], v.vel[j], d,
-                                        kernel_w(p.kernel, r), kernel_f(p.kernel, r));
-                      });
-    const Vec3 rb_minus_rg = p.grid.separation(v.pos[b], rg);
-    Real rho_b = mdbc_boundary_density(sums, p.dim, rb_minus_rg, p.eos.rho0, p.mdbc_det_min);
-    // Walls push, never pull: a boundary below rho0 would attract the free surface.
-    if (rho_b < p.eos.rho0) rho_b = p.eos.rho0;
-    v.rho[b] = rho_b;
-    v.press[b] = tait_pressure(p.eos, rho_b);
-    v.vel_bc[b] = mdbc_boundary_velocity(sums, v.vel[b], v.normal[b], p.free_slip);
-  });
+  for_each(
+      s, end - begin, SPHDEM_LAMBDA(Index k) {
+        const Index b = begin + k;
+        const Vec3 rg = v.ghost[b];
+        MdbcSums sums;
+        for_each_neighbor(p.grid, nl.fluid, v.pos, rg, p.radius2,
+                          [&](Index j, const Vec3& r_gj, Real r2) {
+                            const Real r = std::sqrt(r2);
+                            const Vec3 d = -r_gj;  // r_j - r_G
+                            mdbc_accumulate(sums, v.mass[j] / v.rho[j], v.rho[j], v.vel[j], d,
+                                            kernel_w(p.kernel, r), kernel_f(p.kernel, r));
+                          });
+        const Vec3 rb_minus_rg = p.grid.separation(v.pos[b], rg);
+        Real rho_b = mdbc_boundary_density(sums, p.dim, rb_minus_rg, p.eos.rho0, p.mdbc_det_min);
+        // Walls push, never pull: a boundary below rho0 would attract the free surface.
+        if (rho_b < p.eos.rho0) rho_b = p.eos.rho0;
+        v.rho[b] = rho_b;
+        v.press[b] = tait_pressure(p.eos, rho_b);
+        v.vel_bc[b] = mdbc_boundary_velocity(sums, v.vel[b], v.normal[b], p.free_slip);
+      });
 }
 
 // Accumulates, for particle i at r_i, the interaction with neighbour j. Shared by fluid and
@@ -76,7 +78,8 @@ SPHDEM_HD inline void accumulate_pair(const StepParams& p, const ParticleView& v
   out.drho += continuity_ij(m_j, v_ij, r_ij, f);
   if (p.diffusion && i_fluid && j_fluid) {
     const Real height_ij = -dot(r_ij, p.g_hat);
-    const Real d = diffusion_drho_ij(p.eos, rho_i, rho_j, p.diffusion_hydrostatic, p.g_mag, height_ij);
+    const Real d =
+        diffusion_drho_ij(p.eos, rho_i, rho_j, p.diffusion_hydrostatic, p.g_mag, height_ij);
     out.drho += diffusion_ij(p.delta_h_c0, d, f, m_j, rho_j);
   }
   out.acc += pressure_acc_ij(m_j, v.press[i], rho_i, v.press[j], rho_j, r_ij, f);
@@ -88,7 +91,8 @@ SPHDEM_HD inline void accumulate_pair(const StepParams& p, const ParticleView& v
     out.acc += laminar_acc_ij(m_j, p.nu, rho_i, rho_j, r2, f, p.eta2, vv_ij);
   } else {
     const Real c_mean = p.eos.c0;
-    out.acc += artificial_acc_ij(m_j, p.alpha, c_mean, p.h, rho_i, rho_j, r_ij, r2, f, p.eta2, vv_ij);
+    out.acc +=
+        artificial_acc_ij(m_j, p.alpha, c_mean, p.h, rho_i, rho_j, r_ij, r2, f, p.eta2, vv_ij);
   }
   const Real rate = visc_dt_rate_ij(p.h, vv_ij, r_ij, r2, p.eta2);
   if (rate > out.visc_rate) out.visc_rate = rate;
@@ -100,26 +104,27 @@ SPHDEM_HD inline void accumulate_pair(const StepParams& p, const ParticleView& v
 template <class Space>
 void compute_rates(Space s, ParticleView v, NeighborLists nl, StepParams p, Index begin, Index end,
                    bool fluid_range, Real* rate) {
-  for_each(s, end - begin, SPHDEM_LAMBDA(Index k) {
-    const Index i = begin + k;
-    const Vec3 ri = v.pos[i];
-    PairSums sums;
-    for_each_neighbor(p.grid, nl.fluid, v.pos, ri, p.radius2,
-                      [&](Index j, const Vec3& r_ij, Real r2) {
-                        accumulate_pair(p, v, i, j, r_ij, r2, fluid_range, true, sums);
-                      });
-    if (fluid_range) {
-      for_each_neighbor(p.grid, nl.boundary, v.pos, ri, p.radius2,
-                        [&](Index j, const Vec3& r_ij, Real r2) {
-                          accumulate_pair(p, v, i, j, r_ij, r2, true, false, sums);
-                        });
-      v.acc[i] = sums.acc + p.gravity;
-    } else {
-      v.acc[i] = sums.acc;
-    }
-    v.drho[i] = sums.drho;
-    rate[i] = sums.visc_rate;
-  });
+  for_each(
+      s, end - begin, SPHDEM_LAMBDA(Index k) {
+        const Index i = begin + k;
+        const Vec3 ri = v.pos[i];
+        PairSums sums;
+        for_each_neighbor(p.grid, nl.fluid, v.pos, ri, p.radius2,
+                          [&](Index j, const Vec3& r_ij, Real r2) {
+                            accumulate_pair(p, v, i, j, r_ij, r2, fluid_range, true, sums);
+                          });
+        if (fluid_range) {
+          for_each_neighbor(p.grid, nl.boundary, v.pos, ri, p.radius2,
+                            [&](Index j, const Vec3& r_ij, Real r2) {
+                              accumulate_pair(p, v, i, j, r_ij, r2, true, false, sums);
+                            });
+          v.acc[i] = sums.acc + p.gravity;
+        } else {
+          v.acc[i] = sums.acc;
+        }
+        v.drho[i] = sums.drho;
+        rate[i] = sums.visc_rate;
+      });
 }
 
 // Verlet (seed §2; DualSPHysics): with a = a^n, D = drho^n,
@@ -145,55 +150,60 @@ SPHDEM_HD inline void verlet_update(Vec3& pos, Vec3& vel, Vec3& vel_prev, Real& 
 
 template <class Space>
 void integrate_verlet(Space s, ParticleView v, Index begin, Index end, Real dt, bool euler) {
-  for_each(s, end - begin, SPHDEM_LAMBDA(Index k) {
-    const Index i = begin + k;
-    verlet_update(v.pos[i], v.vel[i], v.vel_prev[i], v.rho[i], v.rho_prev[i], v.acc[i], v.drho[i],
-                  dt, euler);
-  });
+  for_each(
+      s, end - begin, SPHDEM_LAMBDA(Index k) {
+        const Index i = begin + k;
+        verlet_update(v.pos[i], v.vel[i], v.vel_prev[i], v.rho[i], v.rho_prev[i], v.acc[i],
+                      v.drho[i], dt, euler);
+      });
 }
 
 // DBC density for boundary slots: rho^{n+1} = rho^n + dt D, never below rho0.
 template <class Space>
-void integrate_dbc_density(Space s, ParticleView v, Index begin, Index end, Real dt, EosParams eos) {
-  for_each(s, end - begin, SPHDEM_LAMBDA(Index k) {
-    const Index i = begin + k;
-    Real rho = v.rho[i] + v.drho[i] * dt;
-    if (rho < eos.rho0) rho = eos.rho0;
-    v.rho[i] = rho;
-    v.press[i] = tait_pressure(eos, rho);
-  });
+void integrate_dbc_density(Space s, ParticleView v, Index begin, Index end, Real dt,
+                           EosParams eos) {
+  for_each(
+      s, end - begin, SPHDEM_LAMBDA(Index k) {
+        const Index i = begin + k;
+        Real rho = v.rho[i] + v.drho[i] * dt;
+        if (rho < eos.rho0) rho = eos.rho0;
+        v.rho[i] = rho;
+        v.press[i] = tait_pressure(eos, rho);
+      });
 }
 
 // Symplectic position Verlet (DualSPHysics "symplectic"):
-//   predictor: r^{n+1/2} = r^n + dt/2 v^n, v^{n+1/2} = v^n + dt/2 a^n, rho^{n+1/2} = rho^n + dt/2 D^n
-//   corrector: v^{n+1} = v^n + dt a^{n+1/2}, r^{n+1} = r^n + dt (v^n + v^{n+1})/2,
+//   predictor: r^{n+1/2} = r^n + dt/2 v^n, v^{n+1/2} = v^n + dt/2 a^n, rho^{n+1/2} = rho^n + dt/2
+//   D^n corrector: v^{n+1} = v^n + dt a^{n+1/2}, r^{n+1} = r^n + dt (v^n + v^{n+1})/2,
 //              rho^{n+1} = rho^n (2 - eps)/(2 + eps), eps = -D^{n+1/2}/rho^{n+1/2} dt.
 // The predictor keeps r^n in the fluid slot's `ghost` field (unused for fluid) and v^n, rho^n in
 // vel_prev/rho_prev.
 template <class Space>
 void symplectic_predict(Space s, ParticleView v, Index begin, Index end, Real dt) {
-  for_each(s, end - begin, SPHDEM_LAMBDA(Index k) {
-    const Index i = begin + k;
-    v.ghost[i] = v.pos[i];
-    v.vel_prev[i] = v.vel[i];
-    v.rho_prev[i] = v.rho[i];
-    v.pos[i] += v.vel[i] * (Real(0.5) * dt);
-    v.vel[i] += v.acc[i] * (Real(0.5) * dt);
-    v.rho[i] += v.drho[i] * (Real(0.5) * dt);
-  });
+  for_each(
+      s, end - begin, SPHDEM_LAMBDA(Index k) {
+        const Index i = begin + k;
+        v.ghost[i] = v.pos[i];
+        v.vel_prev[i] = v.vel[i];
+        v.rho_prev[i] = v.rho[i];
+        v.pos[i] += v.vel[i] * (Real(0.5) * dt);
+        v.vel[i] += v.acc[i] * (Real(0.5) * dt);
+        v.rho[i] += v.drho[i] * (Real(0.5) * dt);
+      });
 }
 
 template <class Space>
 void symplectic_correct(Space s, ParticleView v, Index begin, Index end, Real dt) {
-  for_each(s, end - begin, SPHDEM_LAMBDA(Index k) {
-    const Index i = begin + k;
-    const Vec3 v_n = v.vel_prev[i];
-    const Vec3 v_new = v_n + v.acc[i] * dt;
-    v.pos[i] = v.ghost[i] + (v_n + v_new) * (Real(0.5) * dt);
-    v.vel[i] = v_new;
-    const Real eps = -v.drho[i] / v.rho[i] * dt;
-    v.rho[i] = v.rho_prev[i] * (Real(2) - eps) / (Real(2) + eps);
-  });
+  for_each(
+      s, end - begin, SPHDEM_LAMBDA(Index k) {
+        const Index i = begin + k;
+        const Vec3 v_n = v.vel_prev[i];
+        const Vec3 v_new = v_n + v.acc[i] * dt;
+        v.pos[i] = v.ghost[i] + (v_n + v_new) * (Real(0.5) * dt);
+        v.vel[i] = v_new;
+        const Real eps = -v.drho[i] / v.rho[i] * dt;
+        v.rho[i] = v.rho_prev[i] * (Real(2) - eps) / (Real(2) + eps);
+      });
 }
 
 }  // namespace sphdem

@@ -17,17 +17,17 @@ struct StepParams {
   EosParams eos;
   CellGrid grid;
   Real dp = 0, h = 0, radius2 = 0;  // radius2 = (2h)^2
-  Real eta2 = 0;                     // 0.01 h^2
+  Real eta2 = 0;                    // 0.01 h^2
   Vec3 gravity;
   Real g_mag = 0;
-  Vec3 g_hat;                        // unit vector along gravity (0 if none)
-  bool laminar = true;               // Lo-Shao laminar; else Monaghan artificial viscosity
-  Real nu = 0;                       // kinematic viscosity (m^2/s)
-  Real alpha = 0;                    // artificial viscosity coefficient
+  Vec3 g_hat;           // unit vector along gravity (0 if none)
+  bool laminar = true;  // Lo-Shao laminar; else Monaghan artificial viscosity
+  Real nu = 0;          // kinematic viscosity (m^2/s)
+  Real alpha = 0;       // artificial viscosity coefficient
   bool diffusion = true;
-  bool diffusion_hydrostatic = true; // Fourtakas correction
-  Real delta_h_c0 = 0;               // delta * h * c0
-  bool mdbc = true;                  // else plain DBC
+  bool diffusion_hydrostatic = true;  // Fourtakas correction
+  Real delta_h_c0 = 0;                // delta * h * c0
+  bool mdbc = true;                   // else plain DBC
   bool free_slip = false;
   Real mdbc_det_min = Real(1e-3);
   Vec3 domain_lo, domain_hi;

@@ -26,13 +26,13 @@ struct ParticleView {
   Real* rho = nullptr;
   Real* mass = nullptr;
   Real* press = nullptr;
-  Vec3* acc = nullptr;       // dv/dt of the current step
-  Real* drho = nullptr;      // drho/dt of the current step
-  Vec3* vel_prev = nullptr;  // Verlet: velocity at the previous step (n-1)
-  Real* rho_prev = nullptr;  // Verlet: density at the previous step (n-1)
-  Vec3* ghost = nullptr;     // boundary: mDBC ghost node; fluid: unused
-  Vec3* normal = nullptr;    // boundary: outward unit normal of the solid; fluid: unused
-  Vec3* vel_bc = nullptr;    // boundary: mDBC velocity seen by the viscous term; fluid: unused
+  Vec3* acc = nullptr;           // dv/dt of the current step
+  Real* drho = nullptr;          // drho/dt of the current step
+  Vec3* vel_prev = nullptr;      // Verlet: velocity at the previous step (n-1)
+  Real* rho_prev = nullptr;      // Verlet: density at the previous step (n-1)
+  Vec3* ghost = nullptr;         // boundary: mDBC ghost node; fluid: unused
+  Vec3* normal = nullptr;        // boundary: outward unit normal of the solid; fluid: unused
+  Vec3* vel_bc = nullptr;        // boundary: mDBC velocity seen by the viscous term; fluid: unused
   std::int32_t* body = nullptr;  // boundary: solid index; fluid: -1
 };
 

@@ -48,7 +48,8 @@ class SolverBase {
 
 // Builds a solver on the host (OpenMP) or the device (CUDA). `particles` come from
 // build_particles(); c0 is the resolved speed of sound.
-std::unique_ptr<SolverBase> make_host_solver(const Scene& scene, ParticleSet<Host> particles, Real c0);
+std::unique_ptr<SolverBase> make_host_solver(const Scene& scene, ParticleSet<Host> particles,
+                                             Real c0);
 std::unique_ptr<SolverBase> make_device_solver(const Scene& scene, ParticleSet<Host> particles,
                                                Real c0);
 

@@ -16,7 +16,9 @@ namespace sphdem {
 
 // Copies a host field set into a space (a move on the host), and back. The Device overloads are
 // in cuda/particles_device.hpp; calls are unqualified so they are found at instantiation.
-inline void to_space(Host, ParticleSet<Host>&& src, ParticleSet<Host>& dst) { dst = std::move(src); }
+inline void to_space(Host, ParticleSet<Host>&& src, ParticleSet<Host>& dst) {
+  dst = std::move(src);
+}
 inline void to_host(Host, ParticleSet<Host>&, ParticleSet<Host>&) {}
 
 template <class Space>
@@ -93,16 +95,17 @@ class Solver final : public SolverBase {
     ParticleView v = ps_.view();
     const NeighborLists nl{fluid_cells_.view(), boundary_cells_.view()};
     const StepParams p = p_;
-    return reduce<SumOp, double>(Space{}, ps_.n_fluid, SPHDEM_LAMBDA(Index i) {
-      double c = 0;
-      auto count = [&](Index, const Vec3&, Real r2) { c += r2 > 0 ? 1 : 0; };
-      for_each_neighbor(p.grid, nl.fluid, v.pos, v.pos[i], p.radius2, count);
-      for_each_neighbor(p.grid, nl.boundary, v.pos, v.pos[i], p.radius2, count);
-      return c;
-    });
+    return reduce<SumOp, double>(
+        Space{}, ps_.n_fluid, SPHDEM_LAMBDA(Index i) {
+          double c = 0;
+          auto count = [&](Index, const Vec3&, Real r2) { c += r2 > 0 ? 1 : 0; };
+          for_each_neighbor(p.grid, nl.fluid, v.pos, v.pos[i], p.radius2, count);
+          for_each_neighbor(p.grid, nl.boundary, v.pos, v.pos[i], p.radius2, count);
+          return c;
+        });
   }
 
- // The steps below are public only because nvcc forbids extended lambdas in private members.
+  // The steps below are public only because nvcc forbids extended lambdas in private members.
   // Pressure, mDBC, and the rates of fluid and boundary particles at the current state.
   void evaluate_rates() {
     using clock = std::chrono::steady_clock;
@@ -124,11 +127,16 @@ class Solver final : public SolverBase {
     ParticleView v = ps_.view();
     const Real* rate = rate_.data();
     const Index nf = ps_.n_fluid;
-    const Real amax2 = reduce<MaxOp, Real>(Space{}, nf, SPHDEM_LAMBDA(Index i) { return norm2(v.acc[i]); });
-    const Real rmax = reduce<MaxOp, Real>(Space{}, nf, SPHDEM_LAMBDA(Index i) { return rate[i]; });
-    const Real vmax2 = reduce<MaxOp, Real>(Space{}, nf, SPHDEM_LAMBDA(Index i) { return norm2(v.vel[i]); });
-    st.rho_min = reduce<MinOp, Real>(Space{}, nf, SPHDEM_LAMBDA(Index i) { return v.rho[i]; });
-    st.rho_max = reduce<MaxOp, Real>(Space{}, nf, SPHDEM_LAMBDA(Index i) { return v.rho[i]; });
+    const Real amax2 = reduce<MaxOp, Real>(
+        Space{}, nf, SPHDEM_LAMBDA(Index i) { return norm2(v.acc[i]); });
+    const Real rmax = reduce<MaxOp, Real>(
+        Space{}, nf, SPHDEM_LAMBDA(Index i) { return rate[i]; });
+    const Real vmax2 = reduce<MaxOp, Real>(
+        Space{}, nf, SPHDEM_LAMBDA(Index i) { return norm2(v.vel[i]); });
+    st.rho_min = reduce<MinOp, Real>(
+        Space{}, nf, SPHDEM_LAMBDA(Index i) { return v.rho[i]; });
+    st.rho_max = reduce<MaxOp, Real>(
+        Space{}, nf, SPHDEM_LAMBDA(Index i) { return v.rho[i]; });
     st.max_speed = std::sqrt(vmax2);
     const Real h = p_.h;
     st.dt_force = amax2 > 0 ? std::sqrt(h / std::sqrt(amax2)) : Real(1e30);
@@ -142,9 +150,7 @@ class Solver final : public SolverBase {
   }
 
   // Sorts the boundary range once (fixed walls do not move).
-  void sort_boundary() {
-    sort_range(ps_.wall_begin(), ps_.n_wall + ps_.n_grain, boundary_cells_);
-  }
+  void sort_boundary() { sort_range(ps_.wall_begin(), ps_.n_wall + ps_.n_grain, boundary_cells_); }
   void sort_fluid() { sort_range(0, ps_.n_fluid, fluid_cells_); }
 
   void sort_range(Index begin, Index count, CellList<Space>& cl) {
@@ -163,26 +169,28 @@ class Solver final : public SolverBase {
     ParticleView v = ps_.view();
     const StepParams p = p_;
     const Index nf = ps_.n_fluid;
-    for_each(Space{}, nf, SPHDEM_LAMBDA(Index i) {
-      Vec3 x = v.pos[i];
-      for (int k = 0; k < 3; ++k) {
-        if (!p.grid.periodic[k]) continue;
-        const Real L = p.grid.period[k];
-        const Real lo = p.grid.lo[k];
-        while (x[k] < lo) x[k] += L;
-        while (x[k] >= lo + L) x[k] -= L;
-      }
-      v.pos[i] = x;
-    });
-    const Index out = reduce<SumOp, Index>(Space{}, nf, SPHDEM_LAMBDA(Index i) {
-      const Vec3 x = v.pos[i];
-      bool outside = false;
-      for (int k = 0; k < 3; ++k) {
-        if (p.grid.periodic[k] || (p.dim == 2 && k == 1)) continue;
-        if (x[k] < p.domain_lo[k] || x[k] > p.domain_hi[k] || x[k] != x[k]) outside = true;
-      }
-      return Index(outside ? 1 : 0);
-    });
+    for_each(
+        Space{}, nf, SPHDEM_LAMBDA(Index i) {
+          Vec3 x = v.pos[i];
+          for (int k = 0; k < 3; ++k) {
+            if (!p.grid.periodic[k]) continue;
+            const Real L = p.grid.period[k];
+            const Real lo = p.grid.lo[k];
+            while (x[k] < lo) x[k] += L;
+            while (x[k] >= lo + L) x[k] -= L;
+          }
+          v.pos[i] = x;
+        });
+    const Index out = reduce<SumOp, Index>(
+        Space{}, nf, SPHDEM_LAMBDA(Index i) {
+          const Vec3 x = v.pos[i];
+          bool outside = false;
+          for (int k = 0; k < 3; ++k) {
+            if (p.grid.periodic[k] || (p.dim == 2 && k == 1)) continue;
+            if (x[k] < p.domain_lo[k] || x[k] > p.domain_hi[k] || x[k] != x[k]) outside = true;
+          }
+          return Index(outside ? 1 : 0);
+        });
     if (out == 0) return 0;
     ParticleSet<Host> h;
     if constexpr (std::is_same_v<Space, Host>) {
@@ -207,7 +215,8 @@ class Solver final : public SolverBase {
     for (Index i = 0; i < n; ++i) {
       if (!keep[std::size_t(i)]) continue;
       if (w != i) {
-        h.for_each_field([&](const char*, auto& field) { field[std::size_t(w)] = field[std::size_t(i)]; });
+        h.for_each_field(
+            [&](const char*, auto& field) { field[std::size_t(w)] = field[std::size_t(i)]; });
       }
       ++w;
     }

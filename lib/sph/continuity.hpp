@@ -28,12 +28,13 @@ SPHDEM_HD inline Real continuity_ij(Real m_j, const Vec3& v_ij, const Vec3& r_ij
 
 // The density difference the diffusion acts on: rho_j - rho_i, minus its hydrostatic part when
 // `hydrostatic` is set. height_ij = (r_i - r_j) . (-g_hat), the height of i above j.
-SPHDEM_HD inline Real diffusion_drho_ij(const EosParams& e, Real rho_i, Real rho_j, bool hydrostatic,
-                                        Real g_mag, Real height_ij) {
+SPHDEM_HD inline Real diffusion_drho_ij(const EosParams& e, Real rho_i, Real rho_j,
+                                        bool hydrostatic, Real g_mag, Real height_ij) {
   Real d = rho_j - rho_i;
   if (hydrostatic) {
     const Real base = Real(1) + e.rho0 * g_mag * height_ij / e.b;
-    const Real rho_h = e.rho0 * (std::pow(base > Real(0) ? base : Real(0), Real(1) / e.gamma) - Real(1));
+    const Real rho_h =
+        e.rho0 * (std::pow(base > Real(0) ? base : Real(0), Real(1) / e.gamma) - Real(1));
     d -= rho_h;
   }
   return d;

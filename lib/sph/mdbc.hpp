@@ -23,8 +23,8 @@ namespace sphdem {
 struct MdbcSums {
   Real a[4][4] = {{0}};  // row 0: W terms; rows 1-3: gradW terms
   Real b[4] = {0};
-  Real shepard = 0;      // sum V_j W
-  Vec3 vel;              // sum V_j v_j W
+  Real shepard = 0;  // sum V_j W
+  Vec3 vel;          // sum V_j v_j W
 };
 
 // Adds fluid particle j (at offset d = r_j - r_G, distance r) to the sums.

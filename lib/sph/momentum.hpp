@@ -24,7 +24,8 @@ SPHDEM_HD inline Vec3 laminar_acc_ij(Real m_j, Real nu_ij, Real rho_i, Real rho_
 }
 
 // Artificial viscosity, Monaghan (1992): -m_j Pi_ij grad_i W_ij with
-//   Pi_ij = -alpha c_mean mu_ij / rho_mean,  mu_ij = h v_ij.r_ij / (r^2 + eta^2), for v_ij.r_ij < 0.
+//   Pi_ij = -alpha c_mean mu_ij / rho_mean,  mu_ij = h v_ij.r_ij / (r^2 + eta^2), for v_ij.r_ij <
+//   0.
 SPHDEM_HD inline Vec3 artificial_acc_ij(Real m_j, Real alpha, Real c_mean, Real h, Real rho_i,
                                         Real rho_j, const Vec3& r_ij, Real r2, Real f, Real eta2,
                                         const Vec3& v_ij) {
@@ -37,7 +38,8 @@ SPHDEM_HD inline Vec3 artificial_acc_ij(Real m_j, Real alpha, Real c_mean, Real 
 
 // The pair rate that limits the acoustic-viscous time step (Eq. 25 as in DualSPHysics; the seed
 // prints it without h, which is not dimensionally a speed): |h v_ij . r_ij / (r^2 + eta^2)|.
-SPHDEM_HD inline Real visc_dt_rate_ij(Real h, const Vec3& v_ij, const Vec3& r_ij, Real r2, Real eta2) {
+SPHDEM_HD inline Real visc_dt_rate_ij(Real h, const Vec3& v_ij, const Vec3& r_ij, Real r2,
+                                      Real eta2) {
   const Real m = h * dot(v_ij, r_ij) / (r2 + eta2);
   return m < 0 ? -m : m;
 }

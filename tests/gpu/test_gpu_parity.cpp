@@ -32,8 +32,8 @@ std::map<GlobalId, std::pair<Vec3, Real>> by_id(const ParticleSet<Host>& ps) {
 
 TEST(GpuParity, DamBreakHostEqualsDevice) {
   if (!gpu_available()) GTEST_SKIP() << "no GPU";
-  const Scene scene = load_scene(std::string(SPHDEM_SOURCE_DIR) + "/inputs/dam_break_2d.yaml",
-                                 {"sph.dp=0.0073"});
+  const Scene scene =
+      load_scene(std::string(SPHDEM_SOURCE_DIR) + "/inputs/dam_break_2d.yaml", {"sph.dp=0.0073"});
   std::ostringstream log;
   auto host = make_solver(scene, Backend::kHost, log);
   auto dev = make_solver(scene, Backend::kDevice, log);
@@ -59,8 +59,8 @@ TEST(GpuParity, DamBreakHostEqualsDevice) {
 TEST(GpuParity, DeviceSortMatchesHostSort) {
   if (!gpu_available()) GTEST_SKIP() << "no GPU";
   // The cell order of both spaces is (cell, id): the id sequence after one step is identical.
-  const Scene scene = load_scene(std::string(SPHDEM_SOURCE_DIR) + "/inputs/dam_break_2d.yaml",
-                                 {"sph.dp=0.0073"});
+  const Scene scene =
+      load_scene(std::string(SPHDEM_SOURCE_DIR) + "/inputs/dam_break_2d.yaml", {"sph.dp=0.0073"});
   std::ostringstream log;
   auto host = make_solver(scene, Backend::kHost, log);
   auto dev = make_solver(scene, Backend::kDevice, log);

@@ -184,7 +184,8 @@ TEST(Neighbors, SumsAreBitIdenticalAcrossRuns) {
                         [&](Index, const Vec3& r, Real r2) { s += std::sqrt(r2) * (1.0 + r.x); });
       out[i] = s;
     });
-    const double total = reduce<SumOp, double>(Host{}, n, [=](Index i) { return out[i] * 1.000001; });
+    const double total =
+        reduce<SumOp, double>(Host{}, n, [=](Index i) { return out[i] * 1.000001; });
     return std::make_pair(per_particle, total);
   };
   const auto a = run();

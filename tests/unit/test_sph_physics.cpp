@@ -48,7 +48,8 @@ TEST(SphEos, TaitAndInverse) {
   const EosParams e = make_eos(1000, 30, 7);
   EXPECT_DOUBLE_EQ(tait_pressure(e, 1000), 0);
   EXPECT_NEAR(tait_pressure(e, 1010), 1000 * 900 / 7.0 * (std::pow(1.01, 7) - 1), 1e-6);
-  for (Real p : {0.0, 10.0, 5000.0, -200.0}) EXPECT_NEAR(tait_pressure(e, tait_density(e, p)), p, 1e-7);
+  for (Real p : {0.0, 10.0, 5000.0, -200.0})
+    EXPECT_NEAR(tait_pressure(e, tait_density(e, p)), p, 1e-7);
   EXPECT_NEAR(tait_sound_speed(e, 1000), 30, 1e-12);
 }
 
@@ -111,7 +112,9 @@ TEST(SphMomentum, ViscosityOpposesRelativeMotion) {
                 approaching),
             0);
   // Receding pairs get no artificial viscosity.
-  EXPECT_EQ(norm(artificial_acc_ij(1e-4, 0.01, 20, 0.01, 1000, 1000, r_ij, r2, f, 1e-6, -approaching)), 0);
+  EXPECT_EQ(
+      norm(artificial_acc_ij(1e-4, 0.01, 20, 0.01, 1000, 1000, r_ij, r2, f, 1e-6, -approaching)),
+      0);
 }
 
 // mDBC: with fluid on a lattice carrying a linear density field, the corrected interpolation
@@ -152,8 +155,8 @@ TEST(SphMdbc, NoSlipAndFreeSlipVelocities) {
   EXPECT_NEAR(ns.x, -1, 1e-14);
   EXPECT_NEAR(ns.z, 0.5, 1e-14);
   const Vec3 fs = mdbc_boundary_velocity(s, Vec3(), n, true);
-  EXPECT_NEAR(fs.x, 1, 1e-14);   // tangential kept
-  EXPECT_NEAR(fs.z, 0.5, 1e-14); // normal mirrored
+  EXPECT_NEAR(fs.x, 1, 1e-14);    // tangential kept
+  EXPECT_NEAR(fs.z, 0.5, 1e-14);  // normal mirrored
 }
 
 }  // namespace

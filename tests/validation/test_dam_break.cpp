@@ -57,8 +57,9 @@ FrontError run_and_compare(int per_width, const std::string& out) {
   opt.quiet = true;
   const RunResult r = run_scene(scene, opt);
   EXPECT_FALSE(r.unstable) << r.failure;
-  const Series ref =
-      read_csv(std::string(SPHDEM_REFERENCE_DATA) + "/dambreak_2d/koshizuka_oka1996_surge_front_L0.146.csv", 0, 1);
+  const Series ref = read_csv(
+      std::string(SPHDEM_REFERENCE_DATA) + "/dambreak_2d/koshizuka_oka1996_surge_front_L0.146.csv",
+      0, 1);
   const Series sim = read_csv(out + "/front.csv", 0, 1);
   FrontError e;
   int n = 0;
@@ -75,8 +76,10 @@ FrontError run_and_compare(int per_width, const std::string& out) {
   EXPECT_GT(n, 20);
   e.rms_rel = std::sqrt(e.rms_rel / n);
   e.mean_rel /= n;
-  std::printf("dam break 2D, dp = L/%d: front error vs Koshizuka & Oka for 1<=T<=3: max %.3f, rms %.3f, mean (lead) %.3f\n",
-              per_width, e.max_rel, e.rms_rel, e.mean_rel);
+  std::printf(
+      "dam break 2D, dp = L/%d: front error vs Koshizuka & Oka for 1<=T<=3: max %.3f, rms %.3f, "
+      "mean (lead) %.3f\n",
+      per_width, e.max_rel, e.rms_rel, e.mean_rel);
   return e;
 }
 
