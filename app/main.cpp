@@ -55,6 +55,8 @@ int main(int argc, char** argv) {
   run->add_option("--backend", backend, "auto, host or device")->capture_default_str();
   run->add_option("--max-steps", max_steps, "stop after this many steps");
   run->add_flag("--quiet", quiet, "no progress lines");
+  std::string restart;
+  run->add_option("--restart", restart, "continue from a checkpoint file, or 'latest' in --out");
 
   auto* check = app.add_subcommand("check", "print counts, memory, dt and cost, then exit");
   check->add_option("scene", scene_path, "scene file (YAML)")->required();
@@ -88,8 +90,9 @@ int main(int argc, char** argv) {
         opt.backend = parse_backend(backend);
         opt.max_steps = max_steps;
         opt.quiet = quiet;
+        opt.restart = restart;
         const RunResult r = run_scene(scene, opt);
-        status = r.unstable ? 3 : 0;
+        status = r.unstable ? 3 : (r.interrupted ? 4 : 0);
       } else if (check->parsed()) {
         check_scene(load_scene(scene_path, sets), std::cout);
       } else if (bench->parsed()) {

@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <csignal>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -14,7 +15,9 @@
 #include "cuda/device.hpp"
 #include "diagnostics/guards.hpp"
 #include "diagnostics/probes.hpp"
+#include "io/checkpoint.hpp"
 #include "io/csv_series.hpp"
+#include "io/frames.hpp"
 
 namespace sphdem {
 
@@ -69,23 +72,30 @@ void write_state_csv(const ParticleSet<Host>& ps, const std::string& path) {
 // Diagnostics of a run: one CSV per named diagnostic.
 class DiagnosticWriter {
  public:
-  DiagnosticWriter(const Scene& s, const std::string& dir) : scene_(s) {
+  // append: a restart continues the series already in `dir`.
+  DiagnosticWriter(const Scene& s, const std::string& dir, bool append) : scene_(s) {
     const Diagnostics& d = s.diagnostics;
+    using Cols = std::vector<std::string>;
+    auto path = [&](const std::string& name) { return dir + "/" + name + ".csv"; };
     for (const auto& g : d.pressure_gauges)
-      pressure_.emplace_back(dir + "/" + g.name + ".csv", std::vector<std::string>{"t", "p"});
+      pressure_.emplace_back(path(g.name), Cols{"t", "p"}, append);
     for (const auto& g : d.height_gauges)
-      height_.emplace_back(dir + "/" + g.name + ".csv", std::vector<std::string>{"t", "h"});
-    for (const auto& g : d.fronts)
-      front_.emplace_back(dir + "/" + g.name + ".csv", std::vector<std::string>{"t", "x_front"});
+      height_.emplace_back(path(g.name), Cols{"t", "h"}, append);
+    for (const auto& g : d.fronts) front_.emplace_back(path(g.name), Cols{"t", "x_front"}, append);
     for (const auto& g : d.forces)
-      force_.emplace_back(dir + "/" + g.name + ".csv",
-                          std::vector<std::string>{"t", "fx", "fy", "fz"});
+      force_.emplace_back(path(g.name), Cols{"t", "fx", "fy", "fz"}, append);
     for (const auto& g : d.profiles) {
-      profile_.emplace_back(dir + "/" + g.name + ".csv",
-                            std::vector<std::string>{"t", "s", "x", "y", "z_surface"});
+      profile_.emplace_back(path(g.name), Cols{"t", "s", "x", "y", "z_surface"}, append);
       profile_next_.push_back(0);
     }
-    if (d.energy) energy_.open(dir + "/energy.csv", {"t", "kinetic", "potential", "total"});
+    if (d.energy) energy_.open(path("energy"), {"t", "kinetic", "potential", "total"}, append);
+  }
+  std::vector<std::int64_t> profile_state() const {
+    return std::vector<std::int64_t>(profile_next_.begin(), profile_next_.end());
+  }
+  void set_profile_state(const std::vector<std::int64_t>& v) {
+    for (std::size_t i = 0; i < v.size() && i < profile_next_.size(); ++i)
+      profile_next_[i] = std::size_t(v[i]);
   }
 
   void write(Real t, const ParticleSet<Host>& ps, const StepParams& p) {
@@ -134,7 +144,8 @@ class DiagnosticWriter {
 // Both to the terminal and to run.log.
 class Log {
  public:
-  explicit Log(const std::string& path, bool quiet) : file_(path), quiet_(quiet) {
+  Log(const std::string& path, bool quiet, bool append)
+      : file_(path, append ? std::ios::app : std::ios::trunc), quiet_(quiet) {
     if (!file_) throw InputError("cannot write run log '" + path + "'");
   }
   template <class T>
@@ -179,7 +190,10 @@ void write_summary(const std::string& path, const Scene& scene, const RunResult&
     << ", \"grain_boundary\": " << r.grain << "},\n"
     << "  \"removed\": {\"count\": " << r.removed << ", \"mass\": " << r.removed_mass << "},\n"
     << "  \"particle_steps_per_second\": " << r.particle_steps_per_second << ",\n"
-    << "  \"status\": \"" << (r.unstable ? "unstable" : "completed") << "\"";
+    << "  \"checkpoints\": " << r.checkpoints << ",\n"
+    << "  \"last_checkpoint\": \"" << r.last_checkpoint << "\",\n"
+    << "  \"status\": \""
+    << (r.unstable ? "unstable" : (r.interrupted ? "interrupted" : "completed")) << "\"";
   if (r.unstable) {
     std::string msg;
     for (char c : r.failure)
@@ -191,13 +205,48 @@ void write_summary(const std::string& path, const Scene& scene, const RunResult&
 
 }  // namespace
 
+namespace {
+// Set by SIGTERM / SIGUSR1; polled once per step.
+volatile std::sig_atomic_t g_signal = 0;
+extern "C" void on_signal(int sig) {
+  g_signal = sig;
+}
+
+struct SignalGuard {
+  explicit SignalGuard(bool on) : on_(on) {
+    if (!on_) return;
+    g_signal = 0;
+    old_term_ = std::signal(SIGTERM, on_signal);
+    old_usr1_ = std::signal(SIGUSR1, on_signal);
+  }
+  ~SignalGuard() {
+    if (!on_) return;
+    std::signal(SIGTERM, old_term_);
+    std::signal(SIGUSR1, old_usr1_);
+  }
+  bool on_;
+  void (*old_term_)(int) = SIG_DFL;
+  void (*old_usr1_)(int) = SIG_DFL;
+};
+}  // namespace
+
 RunResult run_scene(const Scene& scene, const RunOptions& opt) {
   namespace fs = std::filesystem;
   std::error_code ec;
   fs::create_directories(opt.out_dir, ec);
   if (ec)
     throw InputError("--out: cannot create output folder '" + opt.out_dir + "': " + ec.message());
-  Log log(opt.out_dir + "/run.log", opt.quiet);
+
+  // Restart: resolve the file before anything is written to the output folder.
+  std::string restart_file = opt.restart;
+  if (restart_file == "latest") {
+    restart_file = latest_checkpoint(opt.out_dir);
+    if (restart_file.empty())
+      throw InputError("--restart latest: no checkpoint_*.h5 in '" + opt.out_dir + "'");
+  }
+  const bool restarting = !restart_file.empty();
+
+  Log log(opt.out_dir + "/run.log", opt.quiet, restarting);
   {
     std::ofstream y(opt.out_dir + "/scene.yaml");
     y << scene.yaml_text;
@@ -213,17 +262,63 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
       << " grain boundary; dp = " << p.dp << " m, h = " << p.h << " m, c0 = " << p.eos.c0
       << " m/s\n";
 
+  Real next_diag = 0;
+  std::vector<std::int64_t> profile_state;
+  if (restarting) {
+    CheckpointData cp = read_checkpoint(restart_file);
+    check_checkpoint_matches(cp, scene, rep.wall + rep.grain, restart_file);
+    next_diag = cp.next_output_time;
+    profile_state = cp.profile_next;
+    solver->restore(std::move(cp.particles), cp.counters);
+    log << "restarted from " << restart_file << " at t = " << solver->time() << " s, step "
+        << solver->step_count() << "\n";
+  }
+
   RunResult r;
   r.fluid = rep.fluid;
   r.wall = rep.wall;
   r.grain = rep.grain;
   r.space = solver->space_name();
-  DiagnosticWriter diag(scene, opt.out_dir);
+  DiagnosticWriter diag(scene, opt.out_dir, restarting);
+  diag.set_profile_state(profile_state);
+  std::unique_ptr<FrameWriter> frames;
+  Real next_frame = 0;
+  if (scene.frames.every > 0) {
+    frames = std::make_unique<FrameWriter>(opt.out_dir, scene.frames, scene.dim);
+    if (restarting) {
+      frames->adopt_existing(solver->time());
+      next_frame = scene.frames.every * Real(frames->count());
+    }
+  }
+
+  auto save = [&](const std::string& path) {
+    CheckpointData cp;
+    cp.particles = solver->host_particles();  // a copy: the solver keeps its state
+    cp.counters = solver->counters();
+    cp.next_output_time = next_diag;
+    cp.profile_next = diag.profile_state();
+    cp.scene_yaml = scene.yaml_text;
+    cp.dim = scene.dim;
+    cp.dp = scene.sph.dp;
+    const auto t0 = std::chrono::steady_clock::now();
+    const std::uint64_t bytes = write_checkpoint(path, cp);
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    ++r.checkpoints;
+    r.last_checkpoint = path;
+    log << "checkpoint " << path << " (" << bytes / 1048576.0 << " MiB, " << s
+        << " s) at t = " << solver->time() << " s\n";
+  };
+
+  SignalGuard signals(opt.handle_signals);
   const bool tty = !opt.quiet && isatty(STDOUT_FILENO);
   using clock = std::chrono::steady_clock;
   const auto start = clock::now();
-  auto last_progress = start;
-  Real next_diag = 0;
+  auto last_progress = start, last_checkpoint_wall = start;
+  const CheckpointParams& ck = scene.checkpoint;
+  Real next_checkpoint_time =
+      ck.every_time > 0
+          ? ck.every_time * (std::floor(solver->time() / ck.every_time + Real(1e-9)) + 1)
+          : Real(0);
   const Real end = scene.time.end;
   double particle_steps = 0;
   std::int64_t steps = 0;
@@ -233,6 +328,10 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
       if (solver->time() >= next_diag - Real(1e-12)) {
         diag.write(solver->time(), solver->host_particles(), p);
         next_diag += scene.diagnostics.every;
+      }
+      if (frames && solver->time() >= next_frame - Real(1e-12)) {
+        frames->write(solver->time(), solver->host_particles());
+        next_frame += scene.frames.every;
       }
       const StepStats st = solver->step();
       ++steps;
@@ -245,6 +344,28 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
         check_particle_guards(scene, p, solver->host_particles(), solver->time(),
                               solver->step_count());
       const auto now = clock::now();
+      // Checkpoints: by steps, simulated time, wall time, or on a signal.
+      const int sig = g_signal;
+      const bool by_steps = ck.every_steps > 0 && solver->step_count() % ck.every_steps == 0;
+      const bool by_time =
+          ck.every_time > 0 && solver->time() >= next_checkpoint_time - Real(1e-12);
+      const bool by_wall =
+          ck.every_wall > 0 &&
+          std::chrono::duration<double>(now - last_checkpoint_wall).count() >= ck.every_wall;
+      if (by_steps || by_time || by_wall || sig != 0) {
+        if (sig != 0) log << "signal " << (sig == SIGTERM ? "SIGTERM" : "SIGUSR1") << " received\n";
+        save(checkpoint_path(opt.out_dir, solver->step_count()));
+        prune_checkpoints(opt.out_dir, ck.keep);
+        last_checkpoint_wall = now;
+        while (ck.every_time > 0 && next_checkpoint_time <= solver->time() + Real(1e-12))
+          next_checkpoint_time += ck.every_time;
+        g_signal = 0;
+        if (sig == SIGTERM) {
+          r.interrupted = true;
+          log << "stopping on SIGTERM; continue with --restart latest\n";
+          break;
+        }
+      }
       const double since = std::chrono::duration<double>(now - last_progress).count();
       if (!opt.quiet && (since > (tty ? 0.25 : opt.progress_every_s))) {
         last_progress = now;
@@ -264,16 +385,19 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
         log.file() << line.str() << "\n";
       }
     }
-    diag.write(solver->time(), solver->host_particles(), p);
+    if (!r.interrupted) {
+      diag.write(solver->time(), solver->host_particles(), p);
+      if (frames) frames->write(solver->time(), solver->host_particles());
+    }
   } catch (const StabilityError& e) {
     r.unstable = true;
     r.failure = e.what();
-    const std::string dump =
-        opt.out_dir + "/emergency_step" + std::to_string(solver->step_count()) + ".csv";
-    write_state_csv(solver->host_particles(), dump);
     if (tty) std::cout << "\n";
-    log << "ERROR: " << e.what() << "\n"
-        << "emergency state written to " << dump << "\n";
+    log << "ERROR: " << e.what() << "\n";
+    const std::string dump = opt.out_dir + "/emergency_step" + std::to_string(solver->step_count());
+    write_state_csv(solver->host_particles(), dump + ".csv");
+    save(dump + ".h5");
+    log << "emergency state written to " << dump << ".csv and " << dump << ".h5\n";
   }
   if (tty && !r.unstable) std::cout << "\n";
   r.steps = steps;

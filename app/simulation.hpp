@@ -22,6 +22,8 @@ struct RunOptions {
   std::int64_t max_steps = -1;    // stop after this many steps (bench, tests); -1 = to time.end
   bool quiet = false;             // no progress lines
   double progress_every_s = 2.0;  // wall seconds between progress lines when not on a TTY
+  std::string restart;            // checkpoint file, "latest" (newest in out_dir), or "" (none)
+  bool handle_signals = true;     // SIGTERM/SIGUSR1 write a checkpoint (SIGTERM then stops)
 };
 
 struct RunResult {
@@ -33,6 +35,9 @@ struct RunResult {
   double removed_mass = 0;
   double particle_steps_per_second = 0;
   bool unstable = false;
+  bool interrupted = false;  // stopped by SIGTERM after writing a checkpoint
+  int checkpoints = 0;       // checkpoints written (emergency included)
+  std::string last_checkpoint;
   std::string failure;  // the guard's message when unstable
   std::string space;    // host or device
 };

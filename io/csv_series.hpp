@@ -12,8 +12,8 @@ namespace sphdem {
 class CsvSeries {
  public:
   CsvSeries() = default;
-  CsvSeries(const std::string& path, const std::vector<std::string>& columns) {
-    open(path, columns);
+  CsvSeries(const std::string& path, const std::vector<std::string>& columns, bool append = false) {
+    open(path, columns, append);
   }
   CsvSeries(const CsvSeries&) = delete;
   CsvSeries& operator=(const CsvSeries&) = delete;
@@ -22,10 +22,19 @@ class CsvSeries {
     if (f_) std::fclose(f_);
   }
 
-  void open(const std::string& path, const std::vector<std::string>& columns) {
-    f_ = std::fopen(path.c_str(), "w");
+  // append: continue an existing series (restart); the header is written only to a new file.
+  void open(const std::string& path, const std::vector<std::string>& columns, bool append = false) {
+    bool fresh = true;
+    if (append) {
+      if (std::FILE* probe = std::fopen(path.c_str(), "r")) {
+        fresh = std::fgetc(probe) == EOF;
+        std::fclose(probe);
+      }
+    }
+    f_ = std::fopen(path.c_str(), append ? "a" : "w");
     if (!f_) throw InputError("cannot write output file '" + path + "'");
     path_ = path;
+    if (!fresh) return;
     for (std::size_t i = 0; i < columns.size(); ++i)
       std::fprintf(f_, "%s%s", i ? "," : "", columns[i].c_str());
     std::fprintf(f_, "\n");

@@ -39,6 +39,16 @@
 //     rho_max_ratio: 1.3         # (1, 10]
 //     mach_max: 0.1              # (0, 1]
 //     check_every: 1             # [1, 1e6] steps
+//   checkpoint:                  # when to write checkpoints (0 = never by this rule)
+//     every_time: 0              # [0, 1e6] simulated s
+//     every_steps: 0             # [0, 2e9]
+//     every_wall: 0              # [0, 1e7] wall-clock s
+//     keep: 3                    # [1, 1000] newest kept
+//   frames:                      # ParaView frames (HDF5 + one XDMF index)
+//     every: 0                   # [0, 1e6] simulated s; 0 = none
+//     fields: [vel, rho, press]  # from: vel, rho, press, acc, drho, mass, id
+//     boundary: true             # also write wall boundary particles
+//     region: {lo: [..], hi: [..]}   # optional box limiting what is written
 //   solids:                      # a list; names are unique
 //     - name: tank               # required
 //       shape: {type: tank, inner_lo: [..], inner_hi: [..], thickness: 0.01}   # required
@@ -470,6 +480,8 @@ class Parser {
   void parse_sph(const Field& f);
   void parse_time(const Field& f);
   void parse_guards(const Field& f);
+  void parse_checkpoint(const Field& f);
+  void parse_frames(const Field& f);
   void parse_solids(const Field& f);
   void parse_fluid_blocks(const Field& f);
   void parse_diagnostics(const Field& f);
@@ -547,7 +559,7 @@ Scene Parser::parse(const YAML::Node& root) {
   scene_ = &s;
   MapReader top = map(Field{root, root.Mark(), ""},
                       {"name", "dimension", "domain", "gravity", "fluid", "sph", "time", "guards",
-                       "solids", "fluid_blocks", "diagnostics"});
+                       "checkpoint", "frames", "solids", "fluid_blocks", "diagnostics"});
   s.name = name(top.require("name"));
   s.dim = dim_ = integer(top.require("dimension"), 2, 3);
   parse_domain(top.require("domain"));
@@ -559,6 +571,8 @@ Scene Parser::parse(const YAML::Node& root) {
   parse_sph(top.require("sph"));
   parse_time(top.require("time"));
   if (auto f = top.find("guards")) parse_guards(*f);
+  if (auto f = top.find("checkpoint")) parse_checkpoint(*f);
+  if (auto f = top.find("frames")) parse_frames(*f);
   if (auto f = top.find("solids")) parse_solids(*f);
   if (auto f = top.find("fluid_blocks")) parse_fluid_blocks(*f);
   if (auto f = top.find("diagnostics")) parse_diagnostics(*f);
@@ -634,6 +648,46 @@ void Parser::parse_guards(const Field& f) {
   p.rho_max_ratio = m.number("rho_max_ratio", left_open(1, 10), p.rho_max_ratio);
   p.mach_max = m.number("mach_max", left_open(0, 1), p.mach_max);
   p.check_every = m.integer("check_every", 1, 1000000, p.check_every);
+}
+
+void Parser::parse_checkpoint(const Field& f) {
+  CheckpointParams& p = scene_->checkpoint;
+  MapReader m = map(f, {"every_time", "every_steps", "every_wall", "keep"});
+  p.every_time = m.number("every_time", closed(0, 1e6), p.every_time);
+  p.every_steps = m.integer("every_steps", 0, 2000000000, int(p.every_steps));
+  p.every_wall = m.number("every_wall", closed(0, 1e7), p.every_wall);
+  p.keep = int(m.integer("keep", 1, 1000, p.keep));
+}
+
+void Parser::parse_frames(const Field& f) {
+  FrameParams& p = scene_->frames;
+  MapReader m = map(f, {"every", "fields", "boundary", "region"});
+  p.every = m.number("every", closed(0, 1e6), p.every);
+  p.boundary = m.boolean("boundary", p.boundary);
+  if (auto fl = m.find("fields")) {
+    if (!fl->node.IsSequence()) fail(*fl, "expected a list of field names");
+    static const char* kAllowed[] = {"vel", "rho", "press", "acc", "drho", "mass", "id"};
+    p.fields.clear();
+    for (std::size_t i = 0; i < fl->node.size(); ++i) {
+      const Field item{fl->node[i], fl->node[i].Mark(), fl->path + "[" + std::to_string(i) + "]"};
+      if (!item.node.IsScalar()) fail(item, "expected a field name");
+      const std::string v = item.node.Scalar();
+      bool ok = false;
+      for (const char* a : kAllowed) ok = ok || v == a;
+      if (!ok) fail(item, "'" + v + "' is not one of vel, rho, press, acc, drho, mass, id");
+      p.fields.push_back(v);
+    }
+  }
+  if (auto r = m.find("region")) {
+    MapReader rm = map(*r, {"lo", "hi"});
+    p.region = true;
+    p.region_lo = vec3(rm.require("lo"), kCoord);
+    p.region_hi = vec3(rm.require("hi"), kCoord);
+    for (int k = 0; k < 3; ++k) {
+      if (dim_ == 2 && k == 1) continue;
+      if (!(p.region_hi[k] > p.region_lo[k])) fail(*r, "hi must exceed lo on every axis");
+    }
+  }
 }
 
 void Parser::parse_solids(const Field& f) {

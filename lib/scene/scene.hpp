@@ -3,6 +3,7 @@
 // Units are SI throughout. Viscosities say whether they are dynamic (Pa s) or kinematic (m^2/s).
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -19,30 +20,30 @@ enum class SlipCondition { kNoSlip, kFreeSlip };
 enum class Integrator { kVerlet, kSymplectic };
 
 struct FluidParams {
-  Real rho0 = 1000;        // reference density, kg/m^3
-  Real c0 = 0;             // speed of sound, m/s; 0 = derive from c0_factor * sqrt(g * H_max)
-  Real c0_factor = 10;     // c0 = c0_factor * expected max speed when c0 is 0
-  Real gamma = 7;          // Tait exponent (Eq. 6)
+  Real rho0 = 1000;     // reference density, kg/m^3
+  Real c0 = 0;          // speed of sound, m/s; 0 = derive from c0_factor * sqrt(g * H_max)
+  Real c0_factor = 10;  // c0 = c0_factor * expected max speed when c0 is 0
+  Real gamma = 7;       // Tait exponent (Eq. 6)
   ViscosityModel viscosity = ViscosityModel::kLaminar;
-  Real nu = 1e-6;          // laminar kinematic viscosity, m^2/s (Lo-Shao term, Eq. 9)
-  Real alpha = 0.01;       // artificial viscosity coefficient (Monaghan)
+  Real nu = 1e-6;     // laminar kinematic viscosity, m^2/s (Lo-Shao term, Eq. 9)
+  Real alpha = 0.01;  // artificial viscosity coefficient (Monaghan)
   DiffusionModel diffusion = DiffusionModel::kFourtakas;
-  Real delta = 0.1;        // delta-SPH coefficient (Eq. 8)
+  Real delta = 0.1;  // delta-SPH coefficient (Eq. 8)
 };
 
 struct SphParams {
-  Real dp = 0.01;          // initial particle spacing, m
-  Real h_factor = 1.2;     // h = h_factor * sqrt(dim) * dp (DualSPHysics "coefh")
+  Real dp = 0.01;       // initial particle spacing, m
+  Real h_factor = 1.2;  // h = h_factor * sqrt(dim) * dp (DualSPHysics "coefh")
   BoundaryMethod boundary = BoundaryMethod::kMdbc;
   SlipCondition slip = SlipCondition::kNoSlip;
-  int boundary_layers = 0; // 0 = enough layers to fill the kernel support (2h)
+  int boundary_layers = 0;  // 0 = enough layers to fill the kernel support (2h)
 };
 
 struct TimeParams {
-  Real end = 1.0;          // simulated time, s
-  Real cfl = 0.2;          // Courant number (Eq. 23)
-  Real dt_fixed = 0;       // > 0: fixed time step (verification only)
-  Real dt_min = 1e-9;      // floor: a step stuck here is a stability fault
+  Real end = 1.0;      // simulated time, s
+  Real cfl = 0.2;      // Courant number (Eq. 23)
+  Real dt_fixed = 0;   // > 0: fixed time step (verification only)
+  Real dt_min = 1e-9;  // floor: a step stuck here is a stability fault
   Integrator integrator = Integrator::kVerlet;
   int verlet_euler_every = 40;
 };
@@ -50,29 +51,65 @@ struct TimeParams {
 struct GuardParams {
   Real rho_min_ratio = 0.7;  // density outside [rho_min_ratio, rho_max_ratio] * rho0 is a fault
   Real rho_max_ratio = 1.3;
-  Real mach_max = 0.1;       // v_max / c0 above this is a fault
-  int check_every = 1;       // steps between guard checks
+  Real mach_max = 0.1;  // v_max / c0 above this is a fault
+  int check_every = 1;  // steps between guard checks
+};
+
+// When to write checkpoints (any that is > 0 triggers one). SIGTERM/SIGUSR1 and stability
+// guards always write one.
+struct CheckpointParams {
+  Real every_time = 0;           // simulated seconds
+  std::int64_t every_steps = 0;  // steps
+  Real every_wall = 0;           // wall-clock seconds
+  int keep = 3;                  // newest checkpoints kept
+};
+
+// ParaView frames: parallel HDF5 files indexed by one XDMF file.
+struct FrameParams {
+  Real every = 0;  // simulated seconds between frames; 0 = no frames
+  std::vector<std::string> fields{"vel", "rho", "press"};  // fields written besides positions
+  bool boundary = true;  // also write the boundary particles (walls) as a block
+  bool region = false;   // limit to the box [region_lo, region_hi]
+  Vec3 region_lo, region_hi;
 };
 
 struct Solid {
   std::string name;
-  geom::SdfPtr sdf;        // phi < 0 inside the solid
+  geom::SdfPtr sdf;  // phi < 0 inside the solid
 };
 
 struct FluidBlock {
-  Vec3 lo, hi;             // filled on the dp lattice, minus solids
-  Vec3 velocity;           // initial velocity
-  bool hydrostatic = true; // initial pressure rho0 g (surface - z), surface = block top
+  Vec3 lo, hi;              // filled on the dp lattice, minus solids
+  Vec3 velocity;            // initial velocity
+  bool hydrostatic = true;  // initial pressure rho0 g (surface - z), surface = block top
 };
 
-struct PressureGauge { std::string name; Vec3 point; };
-struct HeightGauge { std::string name; Real x = 0, y = 0; };  // vertical line at (x, y)
-struct FrontTracker { std::string name; Vec3 origin; Vec3 direction{1, 0, 0}; };
-struct ProfileSpec { std::string name; Vec3 from, to; int samples = 100; std::vector<Real> times; };
-struct ForceProbe { std::string name; std::string solid; };
+struct PressureGauge {
+  std::string name;
+  Vec3 point;
+};
+struct HeightGauge {
+  std::string name;
+  Real x = 0, y = 0;
+};  // vertical line at (x, y)
+struct FrontTracker {
+  std::string name;
+  Vec3 origin;
+  Vec3 direction{1, 0, 0};
+};
+struct ProfileSpec {
+  std::string name;
+  Vec3 from, to;
+  int samples = 100;
+  std::vector<Real> times;
+};
+struct ForceProbe {
+  std::string name;
+  std::string solid;
+};
 
 struct Diagnostics {
-  Real every = 0.01;       // simulated seconds between CSV rows
+  Real every = 0.01;  // simulated seconds between CSV rows
   std::vector<PressureGauge> pressure_gauges;
   std::vector<HeightGauge> height_gauges;
   std::vector<FrontTracker> fronts;
@@ -82,10 +119,10 @@ struct Diagnostics {
 };
 
 struct Scene {
-  std::string source;      // file it came from
+  std::string source;  // file it came from
   std::string name;
   int dim = 2;
-  Vec3 domain_lo, domain_hi;   // particles leaving it are removed and counted
+  Vec3 domain_lo, domain_hi;  // particles leaving it are removed and counted
   bool periodic[3] = {false, false, false};
   Vec3 gravity{0, 0, -9.81};
   FluidParams fluid;
@@ -95,9 +132,11 @@ struct Scene {
   std::vector<Solid> solids;
   std::vector<FluidBlock> fluid_blocks;
   Diagnostics diagnostics;
-  std::string yaml_text;   // the resolved scene as YAML, stored in outputs and checkpoints
+  CheckpointParams checkpoint;
+  FrameParams frames;
+  std::string yaml_text;  // the resolved scene as YAML, stored in outputs and checkpoints
 
-  Real h() const;          // smoothing length
+  Real h() const;  // smoothing length
   const Solid* find_solid(const std::string& name) const;
 };
 

@@ -28,6 +28,15 @@ struct PhaseTimes {
   double cell_list = 0, mdbc = 0, forces = 0, integrate = 0, other = 0;
 };
 
+// Everything beyond the particle fields that a bit-identical restart needs.
+struct SolverCounters {
+  Real time = 0;
+  std::int64_t step = 0;
+  std::int64_t verlet_count = 0;  // steps since the start, for the Euler step every N
+  Index removed = 0;              // fluid particles removed at open ends so far
+  Real removed_mass = 0;
+};
+
 class SolverBase {
  public:
   virtual ~SolverBase() = default;
@@ -44,6 +53,9 @@ class SolverBase {
   virtual const PhaseTimes& phase_times() const = 0;
   // Number of neighbour pairs within 2h seen by the last force pass (for PIPS).
   virtual double last_pair_count() = 0;
+  // Restart support: the counters, and replacing the whole state (particles and counters).
+  virtual SolverCounters counters() const = 0;
+  virtual void restore(ParticleSet<Host> particles, const SolverCounters& c) = 0;
 };
 
 // Builds a solver on the host (OpenMP) or the device (CUDA). `particles` come from

@@ -91,6 +91,26 @@ class Solver final : public SolverBase {
     return st;
   }
 
+  SolverCounters counters() const override {
+    return SolverCounters{time_, step_, verlet_count_, removed_, removed_mass_};
+  }
+
+  void restore(ParticleSet<Host> particles, const SolverCounters& c) override {
+    host_valid_ = false;
+    to_space(Space{}, std::move(particles), ps_);
+    GlobalId max_id = 0;
+    const auto& h = host_particles();
+    for (Index i = 0; i < h.size(); ++i) max_id = std::max(max_id, h.id[i]);
+    max_id_ = std::max(max_id_, max_id + 1);
+    rate_.resize(std::size_t(ps_.size()));
+    time_ = c.time;
+    step_ = c.step;
+    verlet_count_ = c.verlet_count;
+    removed_ = c.removed;
+    removed_mass_ = c.removed_mass;
+    sort_boundary();
+  }
+
   double last_pair_count() override {
     ParticleView v = ps_.view();
     const NeighborLists nl{fluid_cells_.view(), boundary_cells_.view()};

@@ -1,0 +1,351 @@
+#include "io/checkpoint.hpp"
+
+#include <hdf5.h>
+#include <mpi.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <sstream>
+#include <type_traits>
+
+#include "core/error.hpp"
+#include "io/h5_util.hpp"
+
+namespace sphdem {
+
+namespace {
+
+std::string label(const std::string& path) {
+  return "checkpoint '" + path + "'";
+}
+
+[[noreturn]] void fail(const std::string& path, const std::string& what) {
+  h5::fail(label(path), what);
+}
+
+// FNV-1a over bytes.
+std::uint64_t fnv(const void* p, std::size_t n, std::uint64_t h) {
+  const unsigned char* b = static_cast<const unsigned char*>(p);
+  for (std::size_t i = 0; i < n; ++i) {
+    h ^= b[i];
+    h *= 1099511628211ull;
+  }
+  return h;
+}
+
+// Order-independent checksum: the sum over particles of a hash of all of the particle's fields.
+std::uint64_t local_checksum(const ParticleSet<Host>& ps_const) {
+  auto& ps = const_cast<ParticleSet<Host>&>(ps_const);
+  std::uint64_t sum = 0;
+  for (Index i = 0; i < ps.size(); ++i) {
+    std::uint64_t h = 1469598103934665603ull;
+    ps.for_each_field([&](const char*, auto& b) { h = fnv(&b[std::size_t(i)], sizeof(b[0]), h); });
+    sum += h;
+  }
+  return sum;
+}
+
+// Copies slots [begin, begin+n) of every field of `src` into a new set.
+ParticleSet<Host> slice(const ParticleSet<Host>& src_const, Index begin, Index n) {
+  auto& src = const_cast<ParticleSet<Host>&>(src_const);
+  ParticleSet<Host> out;
+  out.resize(n);
+  std::vector<void*> dst;
+  out.for_each_field([&](const char*, auto& b) { dst.push_back(&b); });
+  std::size_t k = 0;
+  src.for_each_field([&](const char*, auto& b) {
+    using B = std::decay_t<decltype(b)>;
+    auto* d = static_cast<B*>(dst[k++]);
+    for (Index i = 0; i < n; ++i) (*d)[std::size_t(i)] = b[std::size_t(begin + i)];
+  });
+  return out;
+}
+
+}  // namespace
+
+namespace h5 {
+hid_t create_file(const std::string& path) {
+  ensure_mpi();
+  hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
+  H5Pset_fapl_mpio(fapl, MPI_COMM_WORLD, MPI_INFO_NULL);
+  hid_t f = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
+  H5Pclose(fapl);
+  return f;
+}
+hid_t open_file_read(const std::string& path) {
+  ensure_mpi();
+  hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
+  H5Pset_fapl_mpio(fapl, MPI_COMM_WORLD, MPI_INFO_NULL);
+  hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDONLY, fapl);
+  H5Pclose(fapl);
+  return f;
+}
+}  // namespace h5
+
+void ensure_mpi() {
+  int init = 0;
+  MPI_Initialized(&init);
+  if (!init) {
+    int provided = 0;
+    MPI_Init_thread(nullptr, nullptr, MPI_THREAD_FUNNELED, &provided);
+    std::atexit([] {
+      int fin = 0;
+      MPI_Finalized(&fin);
+      if (!fin) MPI_Finalize();
+    });
+  }
+}
+
+std::uint64_t write_checkpoint(const std::string& path, const CheckpointData& d) {
+  ensure_mpi();
+  const MPI_Comm comm = MPI_COMM_WORLD;
+  int rank = 0;
+  MPI_Comm_rank(comm, &rank);
+  const ParticleSet<Host>& ps = d.particles;
+  const Index nb = ps.n_wall + ps.n_grain;
+  Index local[2] = {ps.n_fluid, nb}, total[2] = {0, 0}, offset[2] = {0, 0};
+  MPI_Allreduce(local, total, 2, MPI_INT64_T, MPI_SUM, comm);
+  MPI_Exscan(local, offset, 2, MPI_INT64_T, MPI_SUM, comm);
+  if (rank == 0) offset[0] = offset[1] = 0;
+  std::uint64_t sum_local = local_checksum(ps), sum = 0;
+  MPI_Allreduce(&sum_local, &sum, 1, MPI_UINT64_T, MPI_SUM, comm);
+
+  const std::string tmp = path + ".tmp";
+  hid_t f = h5::create_file(tmp);
+  if (f < 0) throw InputError("cannot create checkpoint file '" + tmp + "'");
+  h5::write_attr<std::int64_t>(f, "format_version", H5T_NATIVE_INT64, kCheckpointFormatVersion);
+  h5::write_attr<double>(f, "time", H5T_NATIVE_DOUBLE, d.counters.time);
+  h5::write_attr<std::int64_t>(f, "step", H5T_NATIVE_INT64, d.counters.step);
+  h5::write_attr<std::int64_t>(f, "verlet_count", H5T_NATIVE_INT64, d.counters.verlet_count);
+  h5::write_attr<std::int64_t>(f, "removed", H5T_NATIVE_INT64, d.counters.removed);
+  h5::write_attr<double>(f, "removed_mass", H5T_NATIVE_DOUBLE, d.counters.removed_mass);
+  h5::write_attr<std::int64_t>(f, "dim", H5T_NATIVE_INT64, d.dim);
+  h5::write_attr<double>(f, "dp", H5T_NATIVE_DOUBLE, d.dp);
+  h5::write_attr<std::int64_t>(f, "real_bytes", H5T_NATIVE_INT64, sizeof(Real));
+  h5::write_attr<double>(f, "next_output_time", H5T_NATIVE_DOUBLE, d.next_output_time);
+  h5::write_attr<std::int64_t>(f, "n_fluid", H5T_NATIVE_INT64, total[0]);
+  h5::write_attr<std::int64_t>(f, "n_boundary", H5T_NATIVE_INT64, total[1]);
+  h5::write_attr<std::uint64_t>(f, "checksum", H5T_NATIVE_UINT64, sum);
+  {
+    const hsize_t n = d.profile_next.size();
+    hid_t sp = H5Screate_simple(1, &n, nullptr);
+    hid_t ds =
+        H5Dcreate2(f, "profile_next", H5T_NATIVE_INT64, sp, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    hid_t ms = H5Screate_simple(1, &n, nullptr);
+    if (rank != 0) {
+      H5Sselect_none(sp);
+      H5Sselect_none(ms);
+    }
+    H5Dwrite(ds, H5T_NATIVE_INT64, ms, sp, H5P_DEFAULT, d.profile_next.data());
+    H5Sclose(ms);
+    H5Dclose(ds);
+    H5Sclose(sp);
+  }
+  {
+    const hsize_t n = d.scene_yaml.size();
+    hid_t sp = H5Screate_simple(1, &n, nullptr);
+    hid_t ds =
+        H5Dcreate2(f, "scene_yaml", H5T_NATIVE_CHAR, sp, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    hid_t ms = H5Screate_simple(1, &n, nullptr);
+    if (rank != 0 || n == 0) {
+      H5Sselect_none(sp);
+      H5Sselect_none(ms);
+    }
+    H5Dwrite(ds, H5T_NATIVE_CHAR, ms, sp, H5P_DEFAULT, d.scene_yaml.data());
+    H5Sclose(ms);
+    H5Dclose(ds);
+    H5Sclose(sp);
+  }
+  const ParticleSet<Host> fluid = slice(ps, 0, ps.n_fluid);
+  const ParticleSet<Host> bound = slice(ps, ps.wall_begin(), nb);
+  for (int g = 0; g < 2; ++g) {
+    hid_t grp = H5Gcreate2(f, g == 0 ? "fluid" : "boundary", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    auto& set = const_cast<ParticleSet<Host>&>(g == 0 ? fluid : bound);
+    set.for_each_field([&](const char* name, auto& b) {
+      h5::write_field(grp, name, b.data(), local[g], offset[g], total[g], label(path));
+    });
+    if (g == 1) {
+      h5::write_attr<std::int64_t>(grp, "n_wall", H5T_NATIVE_INT64, ps.n_wall);
+      h5::write_attr<std::int64_t>(grp, "n_grain", H5T_NATIVE_INT64, ps.n_grain);
+    }
+    H5Gclose(grp);
+  }
+  if (H5Fclose(f) < 0) throw InputError("cannot close checkpoint file '" + tmp + "'");
+  MPI_Barrier(comm);
+  if (rank == 0) {
+    std::error_code ec;
+    std::filesystem::rename(tmp, path, ec);
+    if (ec) throw InputError("cannot rename '" + tmp + "' to '" + path + "': " + ec.message());
+  }
+  MPI_Barrier(comm);
+  std::uint64_t bytes = 0;
+  if (rank == 0) bytes = std::filesystem::file_size(path);
+  MPI_Bcast(&bytes, 1, MPI_UINT64_T, 0, comm);
+  return bytes;
+}
+
+CheckpointData read_checkpoint(const std::string& path) {
+  ensure_mpi();
+  const MPI_Comm comm = MPI_COMM_WORLD;
+  int rank = 0, size = 1;
+  MPI_Comm_rank(comm, &rank);
+  MPI_Comm_size(comm, &size);
+  if (!std::filesystem::exists(path))
+    throw InputError("cannot open checkpoint '" + path + "': no such file");
+  // Silence HDF5's own error stack printing; we report our own message.
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  hid_t f = h5::open_file_read(path);
+  if (f < 0) fail(path, "not a readable HDF5 file (truncated or corrupted?)");
+  CheckpointData d;
+  try {
+    const auto version =
+        h5::read_attr<std::int64_t>(f, "format_version", H5T_NATIVE_INT64, label(path));
+    if (version != kCheckpointFormatVersion) {
+      std::ostringstream os;
+      os << "format version " << version << " is not the supported " << kCheckpointFormatVersion;
+      fail(path, os.str());
+    }
+    const auto real_bytes =
+        h5::read_attr<std::int64_t>(f, "real_bytes", H5T_NATIVE_INT64, label(path));
+    if (real_bytes != std::int64_t(sizeof(Real)))
+      fail(path, "written by a build with a different precision (SPHDEM_PRECISION)");
+    d.counters.time = h5::read_attr<double>(f, "time", H5T_NATIVE_DOUBLE, label(path));
+    d.counters.step = h5::read_attr<std::int64_t>(f, "step", H5T_NATIVE_INT64, label(path));
+    d.counters.verlet_count =
+        h5::read_attr<std::int64_t>(f, "verlet_count", H5T_NATIVE_INT64, label(path));
+    d.counters.removed = h5::read_attr<std::int64_t>(f, "removed", H5T_NATIVE_INT64, label(path));
+    d.counters.removed_mass =
+        h5::read_attr<double>(f, "removed_mass", H5T_NATIVE_DOUBLE, label(path));
+    d.dim = int(h5::read_attr<std::int64_t>(f, "dim", H5T_NATIVE_INT64, path));
+    d.dp = h5::read_attr<double>(f, "dp", H5T_NATIVE_DOUBLE, label(path));
+    d.next_output_time =
+        h5::read_attr<double>(f, "next_output_time", H5T_NATIVE_DOUBLE, label(path));
+    d.total_fluid = h5::read_attr<std::int64_t>(f, "n_fluid", H5T_NATIVE_INT64, label(path));
+    d.total_boundary = h5::read_attr<std::int64_t>(f, "n_boundary", H5T_NATIVE_INT64, label(path));
+    const auto checksum =
+        h5::read_attr<std::uint64_t>(f, "checksum", H5T_NATIVE_UINT64, label(path));
+    for (const char* name : {"profile_next", "scene_yaml"}) {
+      if (H5Lexists(f, name, H5P_DEFAULT) <= 0)
+        fail(path, std::string("'") + name + "' is missing");
+      hid_t ds = H5Dopen2(f, name, H5P_DEFAULT);
+      hid_t sp = H5Dget_space(ds);
+      const hssize_t n = H5Sget_simple_extent_npoints(sp);
+      herr_t e = 0;
+      if (std::strcmp(name, "profile_next") == 0) {
+        d.profile_next.resize(std::size_t(n));
+        if (n > 0)
+          e = H5Dread(ds, H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, d.profile_next.data());
+      } else {
+        d.scene_yaml.resize(std::size_t(n));
+        if (n > 0)
+          e = H5Dread(ds, H5T_NATIVE_CHAR, H5S_ALL, H5S_ALL, H5P_DEFAULT, d.scene_yaml.data());
+      }
+      H5Sclose(sp);
+      H5Dclose(ds);
+      if (e < 0) fail(path, std::string("cannot read '") + name + "'");
+    }
+    // Each rank reads a contiguous block of each group; DMSwarm redistributes afterwards.
+    const Index totals[2] = {d.total_fluid, d.total_boundary};
+    Index counts[2], offs[2];
+    for (int g = 0; g < 2; ++g) {
+      offs[g] = totals[g] * rank / size;
+      counts[g] = totals[g] * (rank + 1) / size - offs[g];
+    }
+    ParticleSet<Host>& ps = d.particles;
+    ps.n_fluid = counts[0];
+    hid_t bg = H5Gopen2(f, "boundary", H5P_DEFAULT);
+    if (bg < 0) fail(path, "group 'boundary' is missing");
+    const auto n_wall_total =
+        h5::read_attr<std::int64_t>(bg, "n_wall", H5T_NATIVE_INT64, label(path));
+    H5Gclose(bg);
+    ps.n_wall = counts[1];
+    ps.n_grain = 0;
+    (void)n_wall_total;
+    ps.resize(ps.size());
+    for (int g = 0; g < 2; ++g) {
+      hid_t grp = H5Gopen2(f, g == 0 ? "fluid" : "boundary", H5P_DEFAULT);
+      if (grp < 0)
+        fail(path, std::string("group '") + (g == 0 ? "fluid" : "boundary") + "' is missing");
+      ParticleSet<Host> part = [&] {
+        ParticleSet<Host> p;
+        p.resize(counts[g]);
+        return p;
+      }();
+      part.for_each_field([&](const char* name, auto& b) {
+        h5::read_field(grp, name, b.data(), counts[g], offs[g], label(path));
+      });
+      H5Gclose(grp);
+      // Place the group's slots into the rank's set.
+      const Index base = g == 0 ? 0 : ps.wall_begin();
+      std::vector<void*> dst;
+      ps.for_each_field([&](const char*, auto& b) { dst.push_back(&b); });
+      std::size_t k = 0;
+      part.for_each_field([&](const char*, auto& b) {
+        using B = std::decay_t<decltype(b)>;
+        auto* out = static_cast<B*>(dst[k++]);
+        for (Index i = 0; i < counts[g]; ++i) (*out)[std::size_t(base + i)] = b[std::size_t(i)];
+      });
+    }
+    std::uint64_t sum_local = local_checksum(ps), sum = 0;
+    MPI_Allreduce(&sum_local, &sum, 1, MPI_UINT64_T, MPI_SUM, comm);
+    if (sum != checksum) fail(path, "checksum mismatch: the file is corrupted");
+  } catch (...) {
+    H5Fclose(f);
+    throw;
+  }
+  H5Fclose(f);
+  return d;
+}
+
+void check_checkpoint_matches(const CheckpointData& cp, const Scene& scene,
+                              Index scene_boundary_count, const std::string& path) {
+  std::ostringstream os;
+  if (cp.dim != scene.dim) {
+    os << "it is " << cp.dim << "D but scene '" << scene.name << "' is " << scene.dim << "D";
+  } else if (std::abs(cp.dp - scene.sph.dp) > Real(1e-12) * scene.sph.dp) {
+    os << "it has dp = " << cp.dp << " m but scene '" << scene.name
+       << "' has sph.dp = " << scene.sph.dp;
+  } else if (cp.total_boundary != scene_boundary_count) {
+    os << "it holds " << cp.total_boundary << " boundary particles but scene '" << scene.name
+       << "' builds " << scene_boundary_count;
+  } else {
+    return;
+  }
+  fail(path, "does not belong to this scene: " + os.str());
+}
+
+std::string checkpoint_path(const std::string& dir, std::int64_t step) {
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "checkpoint_%010lld.h5", static_cast<long long>(step));
+  return dir + "/" + buf;
+}
+
+namespace {
+std::vector<std::string> list_checkpoints(const std::string& dir) {
+  std::vector<std::string> out;
+  std::error_code ec;
+  for (const auto& e : std::filesystem::directory_iterator(dir, ec)) {
+    const std::string n = e.path().filename().string();
+    if (n.rfind("checkpoint_", 0) == 0 && n.size() > 3 && n.substr(n.size() - 3) == ".h5")
+      out.push_back(e.path().string());
+  }
+  std::sort(out.begin(), out.end());  // zero-padded step numbers sort in time order
+  return out;
+}
+}  // namespace
+
+std::string latest_checkpoint(const std::string& dir) {
+  const auto all = list_checkpoints(dir);
+  return all.empty() ? std::string() : all.back();
+}
+
+void prune_checkpoints(const std::string& dir, int keep) {
+  auto all = list_checkpoints(dir);
+  if (keep <= 0 || int(all.size()) <= keep) return;
+  for (std::size_t i = 0; i + std::size_t(keep) < all.size(); ++i) std::filesystem::remove(all[i]);
+}
+
+}  // namespace sphdem

@@ -1,0 +1,198 @@
+// Checkpoint/restart: bit-identical continuation, refusal of bad checkpoints, crash safety
+// (kill -9 during writes), and SIGTERM from a scheduler.
+#include <gtest/gtest.h>
+#include <hdf5.h>
+
+#include <csignal>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <thread>
+
+#include "app/simulation.hpp"
+#include "core/error.hpp"
+#include "io/checkpoint.hpp"
+#include "io/scene_yaml.hpp"
+
+namespace sphdem {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kScene = std::string(SPHDEM_SOURCE_DIR) + "/inputs/dam_break_2d.yaml";
+
+Scene small_scene(std::vector<std::string> extra = {}) {
+  std::vector<std::string> ov = {"sph.dp=0.0073", "time.end=10", "checkpoint.every_steps=100",
+                                 "checkpoint.keep=10"};
+  ov.insert(ov.end(), extra.begin(), extra.end());
+  return load_scene(kScene, ov);
+}
+
+RunResult run(const Scene& s, const std::string& out, std::int64_t steps,
+              const std::string& restart = "") {
+  RunOptions o;
+  o.out_dir = out;
+  o.backend = Backend::kHost;
+  o.quiet = true;
+  o.max_steps = steps;
+  o.restart = restart;
+  o.handle_signals = false;
+  return run_scene(s, o);
+}
+
+// Every field of every particle, keyed by global id, as raw bytes.
+std::map<GlobalId, std::string> state_by_id(const CheckpointData& cp) {
+  auto& ps = const_cast<ParticleSet<Host>&>(cp.particles);
+  std::map<GlobalId, std::string> m;
+  for (Index i = 0; i < ps.size(); ++i) {
+    std::string bytes;
+    ps.for_each_field([&](const char*, auto& b) {
+      bytes.append(reinterpret_cast<const char*>(&b[std::size_t(i)]), sizeof(b[0]));
+    });
+    m[ps.id[i]] = bytes;
+  }
+  return m;
+}
+
+TEST(Restart, ContinuesBitIdentically) {
+  fs::remove_all("restart_straight");
+  fs::remove_all("restart_resumed");
+  const Scene s = small_scene();
+  run(s, "restart_straight", 300);
+  fs::create_directories("restart_resumed");
+  fs::copy_file("restart_straight/checkpoint_0000000100.h5",
+                "restart_resumed/checkpoint_0000000100.h5");
+  const RunResult r = run(s, "restart_resumed", 200, "latest");
+  EXPECT_EQ(r.steps, 200);
+  const CheckpointData a = read_checkpoint("restart_straight/checkpoint_0000000300.h5");
+  const CheckpointData b = read_checkpoint("restart_resumed/checkpoint_0000000300.h5");
+  EXPECT_EQ(a.counters.step, 300);
+  EXPECT_EQ(b.counters.step, 300);
+  EXPECT_EQ(a.counters.time, b.counters.time);  // bitwise
+  const auto ma = state_by_id(a), mb = state_by_id(b);
+  ASSERT_EQ(ma.size(), mb.size());
+  std::size_t differ = 0;
+  for (const auto& [id, bytes] : ma) differ += (mb.at(id) != bytes);
+  EXPECT_EQ(differ, 0u);
+  // The comparison can fail: the state at step 200 differs from the one at 300.
+  const CheckpointData c = read_checkpoint("restart_straight/checkpoint_0000000200.h5");
+  const auto mc = state_by_id(c);
+  std::size_t changed = 0;
+  for (const auto& [id, bytes] : ma) changed += (mc.at(id) != bytes);
+  EXPECT_GT(changed, ma.size() / 2);
+  // Diagnostics continue in the same files, one header only.
+  std::ifstream f("restart_resumed/front.csv");
+  std::string line;
+  int headers = 0;
+  while (std::getline(f, line)) headers += line.rfind("t,", 0) == 0;
+  EXPECT_EQ(headers, 1);
+}
+
+TEST(Restart, RefusesBadCheckpoints) {
+  fs::remove_all("restart_bad");
+  const Scene s = small_scene();
+  run(s, "restart_bad", 100);
+  const std::string good = "restart_bad/checkpoint_0000000100.h5";
+  ASSERT_TRUE(fs::exists(good));
+  // Missing file.
+  try {
+    read_checkpoint("restart_bad/nope.h5");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), "cannot open checkpoint 'restart_bad/nope.h5': no such file");
+  }
+  // Truncated file.
+  fs::copy_file(good, "restart_bad/truncated.h5");
+  fs::resize_file("restart_bad/truncated.h5", fs::file_size(good) / 2);
+  try {
+    read_checkpoint("restart_bad/truncated.h5");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("checkpoint 'restart_bad/truncated.h5'"),
+              std::string::npos)
+        << e.what();
+  }
+  // Corrupted data: flip bytes in the middle of the particle data.
+  fs::copy_file(good, "restart_bad/corrupt.h5");
+  {
+    std::fstream f("restart_bad/corrupt.h5", std::ios::in | std::ios::out | std::ios::binary);
+    const auto n = fs::file_size(good);
+    for (std::uintmax_t off = n / 2; off < n / 2 + 64; ++off) {
+      f.seekg(std::streamoff(off));
+      char c = 0;
+      f.read(&c, 1);
+      f.seekp(std::streamoff(off));
+      c = char(c ^ 0x5a);
+      f.write(&c, 1);
+    }
+  }
+  try {
+    read_checkpoint("restart_bad/corrupt.h5");
+    FAIL();
+  } catch (const InputError& e) {
+    const std::string m = e.what();
+    EXPECT_TRUE(m.find("checksum mismatch") != std::string::npos ||
+                m.find("cannot read") != std::string::npos)
+        << m;
+  }
+  // A checkpoint of another scene (different dp).
+  const Scene other = small_scene({"sph.dp=0.0146"});
+  try {
+    run(other, "restart_bad", 10, good);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "checkpoint '" + good +
+                  "': does not belong to this scene: it has dp = 0.0073 m but "
+                  "scene 'dam_break_2d' has sph.dp = 0.0146");
+  }
+}
+
+// Runs the sphdem binary; returns its exit status.
+int sh(const std::string& cmd) {
+  const int st = std::system(cmd.c_str());
+  return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+}
+
+TEST(Restart, KillDuringCheckpointWritesLeavesAUsableCheckpoint) {
+  // Checkpoint every step so the kill lands in or near a write; after each kill -9 the newest
+  // checkpoint must read back (its checksum verified), and the run must restart from it.
+  fs::remove_all("restart_kill");
+  const std::string base = std::string(SPHDEM_BINARY) + " run " + kScene +
+                           " --out restart_kill --quiet --set sph.dp=0.0073 --set time.end=10"
+                           " --set checkpoint.every_steps=1 --set checkpoint.keep=2";
+  int kills = 0;
+  for (int k = 0; k < 4; ++k) {
+    const std::string cmd = "timeout -s KILL " + std::to_string(1.5 + 0.37 * k) + " " + base +
+                            (k == 0 ? "" : " --restart latest") + " > /dev/null 2>&1";
+    const int rc = sh(cmd);
+    kills += rc == 137 || rc == -1;
+    const std::string latest = latest_checkpoint("restart_kill");
+    ASSERT_FALSE(latest.empty());
+    EXPECT_NO_THROW(read_checkpoint(latest)) << latest;
+  }
+  EXPECT_GE(kills, 3);
+}
+
+TEST(Restart, SigtermWritesACheckpointAndStops) {
+  fs::remove_all("restart_term");
+  const std::string cmd = std::string(SPHDEM_BINARY) + " run " + kScene +
+                          " --out restart_term --quiet --set sph.dp=0.0073 --set time.end=10";
+  const int rc = sh("(" + cmd + " > /dev/null 2>&1 & pid=$!; sleep 2; kill -TERM $pid; wait $pid)");
+  EXPECT_EQ(rc, 4);
+  const std::string latest = latest_checkpoint("restart_term");
+  ASSERT_FALSE(latest.empty());
+  std::ifstream f("restart_term/summary.json");
+  std::stringstream ss;
+  ss << f.rdbuf();
+  EXPECT_NE(ss.str().find("\"status\": \"interrupted\""), std::string::npos) << ss.str();
+  const CheckpointData cp = read_checkpoint(latest);
+  EXPECT_GT(cp.counters.step, 0);
+  // And the run continues from it.
+  EXPECT_EQ(sh(cmd + " --restart latest --max-steps 20 > /dev/null 2>&1"), 0);
+}
+
+}  // namespace
+}  // namespace sphdem
