@@ -34,6 +34,13 @@ def read(path, tcol=0, vcol=1):
     return xs, ys
 
 
+def interp(x, xs, ys):
+    for i in range(1, len(xs)):
+        if x <= xs[i]:
+            return ys[i - 1] + (ys[i] - ys[i - 1]) * (x - xs[i - 1]) / (xs[i] - xs[i - 1])
+    return ys[-1]
+
+
 def main():
     out = sys.argv[1]
     runs = sys.argv[2:]
@@ -45,9 +52,21 @@ def main():
     a1.plot(t, z, "k^", mfc="none", label="Martin & Moyce (1952)")
     t, h = read(os.path.join(REF, "koshizuka_oka1996_column_height_smoothedparticles.csv"))
     a2.plot(t, h, "ko", label="Koshizuka & Oka (1996)")
+    rt, rz = read(os.path.join(REF, "koshizuka_oka1996_surge_front_L0.146.csv"))
     for spec in runs:
         d, _, label = spec.partition(":")
         t, x = read(os.path.join(d, "front.csv"))
+        # Front error against Koshizuka & Oka for 1 <= T <= 3 (same measure as the ctest).
+        errs = []
+        for ti, xi in zip(t, x):
+            T = ti * ts
+            if 1 <= T <= 3:
+                zr = interp(T, rt, rz)
+                errs.append((xi / L - zr) / zr)
+        if errs:
+            rms = math.sqrt(sum(e * e for e in errs) / len(errs))
+            print(f"{label or d}: front vs K&O, 1<=T<=3: max {max(abs(e) for e in errs):.3f}, "
+                  f"rms {rms:.3f}, mean {sum(errs) / len(errs):+.3f}")
         a1.plot([v * ts for v in t], [v / L for v in x], "-", label=label or d)
         t, h = read(os.path.join(d, "column_height.csv"))
         a2.plot([v * ts for v in t], [v / (2 * L) for v in h], "-", label=label or d)

@@ -21,6 +21,16 @@
 //                                # model laminar|artificial; nu [0, 1e3] m^2/s (kinematic);
 //                                # alpha [0, 10] (Monaghan artificial viscosity)
 //     diffusion: {model: fourtakas, delta: 0.1}   # model none|molteni|fourtakas; delta [0, 1]
+//     rheology:                  # Herschel-Bulkley-Papanastasiou (seed Eqs. 11-15)
+//       model: newtonian         # newtonian|hbp (hbp needs viscosity.model laminar)
+//       k: 1e-3                  # [0, 1e6] Pa s^n, consistency (dynamic)
+//       n: 1                     # [0.1, 3] flow index
+//       m: 100                   # [0, 1e6] s, Papanastasiou exponent
+//       cohesion: 0              # [0, 1e7] Pa
+//       friction_deg: 0          # [0, 89] degrees; tau_y = cohesion + max(p, 0) tan(phi)
+//       mu_max: 1e3              # (0, 1e7] Pa s, cap on mu_eff
+//       yield: true              # false drops the yield term (diagnostics)
+//     sps: {enabled: false, cs: 0.12, ci: 0.0066}   # Dalrymple & Rogers SPS turbulence
 //   sph:                         # required
 //     dp: 0.002                  # required; (0, 1] m, initial particle spacing
 //     h_factor: 1.2              # [0.5, 3]; h = h_factor * sqrt(dimension) * dp
@@ -214,6 +224,8 @@ const EnumTable<DiffusionModel> kDiffusionModels = {{"none", DiffusionModel::kNo
                                                     {"fourtakas", DiffusionModel::kFourtakas}};
 const EnumTable<ViscosityModel> kViscosityModels = {{"laminar", ViscosityModel::kLaminar},
                                                     {"artificial", ViscosityModel::kArtificial}};
+const EnumTable<RheologyModel> kRheologyModels = {{"newtonian", RheologyModel::kNewtonian},
+                                                  {"hbp", RheologyModel::kHbp}};
 const EnumTable<BoundaryMethod> kBoundaryMethods = {{"dbc", BoundaryMethod::kDbc},
                                                     {"mdbc", BoundaryMethod::kMdbc}};
 const EnumTable<SlipCondition> kSlipConditions = {{"noslip", SlipCondition::kNoSlip},
@@ -599,7 +611,8 @@ void Parser::parse_domain(const Field& f) {
 
 void Parser::parse_fluid(const Field& f) {
   FluidParams& p = scene_->fluid;
-  MapReader m = map(f, {"rho0", "c0", "c0_factor", "gamma", "viscosity", "diffusion"});
+  MapReader m =
+      map(f, {"rho0", "c0", "c0_factor", "gamma", "viscosity", "diffusion", "rheology", "sps"});
   p.rho0 = m.number("rho0", left_open(0, 1e5), p.rho0);
   p.c0 = m.number("c0", closed(0, 1e4), p.c0);
   p.c0_factor = m.number("c0_factor", closed(1, 100), p.c0_factor);
@@ -614,6 +627,28 @@ void Parser::parse_fluid(const Field& f) {
     MapReader dm = map(*d, {"model", "delta"});
     p.diffusion = dm.enumeration("model", kDiffusionModels, p.diffusion);
     p.delta = dm.number("delta", closed(0, 1), p.delta);
+  }
+  if (auto r = m.find("rheology")) {
+    RheologyParams& q = p.rheology;
+    MapReader rm = map(*r, {"model", "k", "n", "m", "cohesion", "friction_deg", "mu_max", "yield"});
+    q.model = rm.enumeration("model", kRheologyModels, q.model);
+    q.k = rm.number("k", closed(0, 1e6), q.k);
+    q.n = rm.number("n", closed(0.1, 3), q.n);
+    q.m = rm.number("m", closed(0, 1e6), q.m);
+    q.cohesion = rm.number("cohesion", closed(0, 1e7), q.cohesion);
+    q.friction_deg = rm.number("friction_deg", closed(0, 89), q.friction_deg);
+    q.mu_max = rm.number("mu_max", left_open(0, 1e7), q.mu_max);
+    q.yield = rm.boolean("yield", q.yield);
+    if (q.model == RheologyModel::kHbp && p.viscosity != ViscosityModel::kLaminar) {
+      fail(*rm.find("model"),
+           "hbp needs fluid.viscosity.model: laminar (mu_eff drives the laminar term)");
+    }
+  }
+  if (auto sp = m.find("sps")) {
+    MapReader sm = map(*sp, {"enabled", "cs", "ci"});
+    p.sps.enabled = sm.boolean("enabled", p.sps.enabled);
+    p.sps.cs = sm.number("cs", closed(0, 1), p.sps.cs);
+    p.sps.ci = sm.number("ci", closed(0, 1), p.sps.ci);
   }
 }
 

@@ -19,6 +19,28 @@ enum class BoundaryMethod { kDbc, kMdbc };
 enum class SlipCondition { kNoSlip, kFreeSlip };
 enum class Integrator { kVerlet, kSymplectic };
 
+enum class RheologyModel { kNewtonian, kHbp };
+
+// Herschel-Bulkley-Papanastasiou with Mohr-Coulomb yield (seed Eqs. 11-15); see
+// lib/sph/rheology.hpp.
+struct RheologyParams {
+  RheologyModel model = RheologyModel::kNewtonian;
+  Real k = 1e-3;          // consistency K, Pa s^n (dynamic)
+  Real n = 1;             // flow index
+  Real m = 100;           // Papanastasiou exponent, s
+  Real cohesion = 0;      // c, Pa
+  Real friction_deg = 0;  // phi, degrees
+  Real mu_max = 1e3;      // cap on mu_eff, Pa s
+  bool yield = true;      // false drops the yield term (diagnostic use)
+};
+
+// Sub-particle-scale turbulence, Dalrymple & Rogers (2006).
+struct SpsParams {
+  bool enabled = false;
+  Real cs = 0.12;  // Smagorinsky constant
+  Real ci = 0.0066;
+};
+
 struct FluidParams {
   Real rho0 = 1000;     // reference density, kg/m^3
   Real c0 = 0;          // speed of sound, m/s; 0 = derive from c0_factor * sqrt(g * H_max)
@@ -29,6 +51,8 @@ struct FluidParams {
   Real alpha = 0.01;  // artificial viscosity coefficient (Monaghan)
   DiffusionModel diffusion = DiffusionModel::kFourtakas;
   Real delta = 0.1;  // delta-SPH coefficient (Eq. 8)
+  RheologyParams rheology;
+  SpsParams sps;
 };
 
 struct SphParams {

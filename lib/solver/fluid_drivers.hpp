@@ -11,6 +11,7 @@
 #include "sph/kernel.hpp"
 #include "sph/mdbc.hpp"
 #include "sph/momentum.hpp"
+#include "sph/rheology.hpp"
 
 namespace sphdem {
 
@@ -56,6 +57,37 @@ void update_mdbc(Space s, ParticleView v, NeighborLists nl, StepParams p, Index 
       });
 }
 
+// Velocity gradient of fluid slots [0, n) (fluid and boundary neighbours; a boundary neighbour
+// contributes its mDBC velocity), then mu_eff (HBP) and the SPS stress from the strain rate.
+template <class Space>
+void compute_viscous_state(Space s, ParticleView v, NeighborLists nl, StepParams p, Index n) {
+  for_each(
+      s, n, SPHDEM_LAMBDA(Index i) {
+        const Vec3 ri = v.pos[i], vi = v.vel[i];
+        Mat3g G;
+        auto add = [&](Index j, const Vec3& r_ij, Real r2, bool fluid) {
+          if (r2 <= Real(0)) return;
+          const Real f = kernel_f(p.kernel, std::sqrt(r2));
+          const Vec3 vj = fluid || !p.mdbc ? v.vel[j] : v.vel_bc[j];
+          velocity_gradient_add(G, v.mass[j] / v.rho[j], vj - vi, r_ij, f);
+        };
+        for_each_neighbor(p.grid, nl.fluid, v.pos, ri, p.radius2,
+                          [&](Index j, const Vec3& r_ij, Real r2) { add(j, r_ij, r2, true); });
+        for_each_neighbor(p.grid, nl.boundary, v.pos, ri, p.radius2,
+                          [&](Index j, const Vec3& r_ij, Real r2) { add(j, r_ij, r2, false); });
+        const SymTensor eps = strain_rate(G);
+        if (p.hbp) {
+          const Real tau_y = yield_stress(p.hbp_params, v.press[i]);
+          v.visc[i] = hbp_viscosity(p.hbp_params, shear_rate(eps), tau_y);
+        }
+        if (p.sps) {
+          const SymTensor t = sps_stress_over_rho(eps, p.sps_cs, p.sps_ci, p.dp);
+          v.sps_d[i] = t.d;
+          v.sps_o[i] = t.o;
+        }
+      });
+}
+
 // Accumulates, for particle i at r_i, the interaction with neighbour j. Shared by fluid and
 // boundary gathers so the pair physics exists once. `j_fluid` selects density diffusion (fluid
 // pairs only, as in DualSPHysics) and the velocity seen by the viscous term.
@@ -87,12 +119,26 @@ SPHDEM_HD inline void accumulate_pair(const StepParams& p, const ParticleView& v
   const Vec3 vi = i_fluid || !p.mdbc ? v.vel[i] : v.vel_bc[i];
   const Vec3 vj = j_fluid || !p.mdbc ? v.vel[j] : v.vel_bc[j];
   const Vec3 vv_ij = vi - vj;
-  if (p.laminar) {
+  if (p.hbp) {
+    // Variable viscosity mu_eff (dynamic, Pa s). The pair viscosity is the harmonic mean
+    // 2 mu_i mu_j / (mu_i + mu_j), which keeps the shear stress continuous across a jump in mu
+    // (plug edge: mu jumps by mu_max/K); the arithmetic mean would let the plug's viscosity leak
+    // into the yielded layer. nu_ij = mu_ij / rho_mean. A boundary slot takes the fluid's mu.
+    const Real mu_i = i_fluid ? v.visc[i] : v.visc[j];
+    const Real mu_j = j_fluid ? v.visc[j] : mu_i;
+    const Real mu_ij = Real(2) * mu_i * mu_j / (mu_i + mu_j);
+    out.acc +=
+        laminar_acc_ij(m_j, Real(2) * mu_ij / (rho_i + rho_j), rho_i, rho_j, r2, f, p.eta2, vv_ij);
+  } else if (p.laminar) {
     out.acc += laminar_acc_ij(m_j, p.nu, rho_i, rho_j, r2, f, p.eta2, vv_ij);
   } else {
     const Real c_mean = p.eos.c0;
     out.acc +=
         artificial_acc_ij(m_j, p.alpha, c_mean, p.h, rho_i, rho_j, r_ij, r2, f, p.eta2, vv_ij);
+  }
+  if (p.sps && i_fluid && j_fluid) {
+    const SymTensor ti{v.sps_d[i], v.sps_o[i]}, tj{v.sps_d[j], v.sps_o[j]};
+    out.acc += sps_acc_ij(m_j, ti, rho_i, tj, rho_j, r_ij, f);
   }
   const Real rate = visc_dt_rate_ij(p.h, vv_ij, r_ij, r2, p.eta2);
   if (rate > out.visc_rate) out.visc_rate = rate;

@@ -27,6 +27,18 @@ StepParams make_step_params(const Scene& scene, Real c0) {
   p.delta_h_c0 = scene.fluid.delta * p.h * c0;
   p.mdbc = scene.sph.boundary == BoundaryMethod::kMdbc;
   p.free_slip = scene.sph.slip == SlipCondition::kFreeSlip;
+  const RheologyParams& rh = scene.fluid.rheology;
+  p.hbp = rh.model == RheologyModel::kHbp;
+  p.hbp_params.k = rh.k;
+  p.hbp_params.n = rh.n;
+  p.hbp_params.m = rh.m;
+  p.hbp_params.cohesion = rh.cohesion;
+  p.hbp_params.tan_phi = std::tan(rh.friction_deg * kPi / Real(180));
+  p.hbp_params.mu_max = rh.mu_max;
+  p.hbp_params.yield = rh.yield;
+  p.sps = scene.fluid.sps.enabled;
+  p.sps_cs = scene.fluid.sps.cs;
+  p.sps_ci = scene.fluid.sps.ci;
   p.domain_lo = scene.domain_lo;
   p.domain_hi = scene.domain_hi;
   // The grid covers the domain plus the boundary depth, so wall particles outside the fluid

@@ -5,6 +5,7 @@
 #include "neighbor/cell_grid.hpp"
 #include "sph/eos.hpp"
 #include "sph/kernel.hpp"
+#include "sph/rheology.hpp"
 
 namespace sphdem {
 
@@ -30,6 +31,10 @@ struct StepParams {
   bool mdbc = true;                   // else plain DBC
   bool free_slip = false;
   Real mdbc_det_min = Real(1e-3);
+  bool hbp = false;  // per-particle mu_eff from the HBP model drives the laminar term
+  HbpParams hbp_params;
+  bool sps = false;  // Dalrymple & Rogers SPS stress
+  Real sps_cs = 0, sps_ci = 0;
   Vec3 domain_lo, domain_hi;
 };
 

@@ -34,6 +34,11 @@ struct ParticleView {
   Vec3* normal = nullptr;        // boundary: outward unit normal of the solid; fluid: unused
   Vec3* vel_bc = nullptr;        // boundary: mDBC velocity seen by the viscous term; fluid: unused
   std::int32_t* body = nullptr;  // boundary: solid index; fluid: -1
+  // Per-step scratch owned by the solver (not stored, permuted or checkpointed): rebuilt from the
+  // velocity field before each force pass when the rheology or SPS needs them.
+  Real* visc = nullptr;   // fluid: effective dynamic viscosity mu_eff (Pa s)
+  Vec3* sps_d = nullptr;  // fluid: SPS tau/rho, diagonal (xx, yy, zz)
+  Vec3* sps_o = nullptr;  // fluid: SPS tau/rho, off-diagonal (xy, xz, yz)
 };
 
 template <class Space>

@@ -70,7 +70,7 @@ class Solver final : public SolverBase {
     st = limits(st);
     const Real dt = st.dt;
     auto t2 = clock::now();
-    ParticleView v = ps_.view();
+    ParticleView v = view();
     const Index nf = ps_.n_fluid;
     if (symplectic) {
       symplectic_predict(Space{}, v, 0, nf, dt);
@@ -89,6 +89,21 @@ class Solver final : public SolverBase {
     time_ += dt;
     ++step_;
     return st;
+  }
+
+  // The particle view plus the solver's per-step scratch fields.
+  ParticleView view() {
+    const std::size_t n = std::size_t(ps_.size());
+    if (visc_.size() < n) {
+      visc_.resize(n);
+      sps_d_.resize(n);
+      sps_o_.resize(n);
+    }
+    ParticleView v = ps_.view();
+    v.visc = visc_.data();
+    v.sps_d = sps_d_.data();
+    v.sps_o = sps_o_.data();
+    return v;
   }
 
   SolverCounters counters() const override {
@@ -112,7 +127,7 @@ class Solver final : public SolverBase {
   }
 
   double last_pair_count() override {
-    ParticleView v = ps_.view();
+    ParticleView v = view();
     const NeighborLists nl{fluid_cells_.view(), boundary_cells_.view()};
     const StepParams p = p_;
     return reduce<SumOp, double>(
@@ -129,11 +144,12 @@ class Solver final : public SolverBase {
   // Pressure, mDBC, and the rates of fluid and boundary particles at the current state.
   void evaluate_rates() {
     using clock = std::chrono::steady_clock;
-    ParticleView v = ps_.view();
+    ParticleView v = view();
     const NeighborLists nl{fluid_cells_.view(), boundary_cells_.view()};
     auto t0 = clock::now();
     compute_pressure(Space{}, v, 0, ps_.n_fluid, p_.eos);
     if (p_.mdbc) update_mdbc(Space{}, v, nl, p_, ps_.wall_begin(), ps_.size());
+    if (p_.hbp || p_.sps) compute_viscous_state(Space{}, v, nl, p_, ps_.n_fluid);
     auto t1 = clock::now();
     compute_rates(Space{}, v, nl, p_, 0, ps_.n_fluid, true, rate_.data());
     compute_rates(Space{}, v, nl, p_, ps_.wall_begin(), ps_.size(), false, rate_.data());
@@ -144,7 +160,7 @@ class Solver final : public SolverBase {
 
   // Time-step limits of Eq. (23) with the viscous limit; fills dt and the fluid extremes.
   StepStats limits(StepStats st) {
-    ParticleView v = ps_.view();
+    ParticleView v = view();
     const Real* rate = rate_.data();
     const Index nf = ps_.n_fluid;
     const Real amax2 = reduce<MaxOp, Real>(
@@ -162,6 +178,13 @@ class Solver final : public SolverBase {
     st.dt_force = amax2 > 0 ? std::sqrt(h / std::sqrt(amax2)) : Real(1e30);
     st.dt_acoustic = h / (p_.eos.c0 + rmax);
     st.dt_viscous = p_.laminar && p_.nu > 0 ? Real(0.125) * h * h / p_.nu : Real(1e30);
+    if (p_.hbp) {
+      // Explicit viscous limit with the largest mu_eff / rho (kinematic).
+      const Real* visc = visc_.data();
+      const Real nu_max = reduce<MaxOp, Real>(
+          Space{}, nf, SPHDEM_LAMBDA(Index i) { return visc[i] / v.rho[i]; });
+      st.dt_viscous = nu_max > 0 ? Real(0.125) * h * h / nu_max : Real(1e30);
+    }
     Real dt = scene_.time.cfl * std::min(st.dt_force, st.dt_acoustic);
     dt = std::min(dt, st.dt_viscous);
     if (scene_.time.dt_fixed > 0) dt = scene_.time.dt_fixed;
@@ -186,7 +209,7 @@ class Solver final : public SolverBase {
   // Wraps periodic axes and removes fluid that left the domain (open ends). Removal compacts on
   // the host: it is rare, and keeps the id order.
   Index remove_and_wrap() {
-    ParticleView v = ps_.view();
+    ParticleView v = view();
     const StepParams p = p_;
     const Index nf = ps_.n_fluid;
     for_each(
@@ -260,6 +283,8 @@ class Solver final : public SolverBase {
   bool host_valid_ = false;
   CellList<Space> fluid_cells_, boundary_cells_;
   Buffer<Real, Space> rate_;
+  Buffer<Real, Space> visc_;
+  Buffer<Vec3, Space> sps_d_, sps_o_;
   GlobalId max_id_ = 0;
   Real time_ = 0;
   std::int64_t step_ = 0;

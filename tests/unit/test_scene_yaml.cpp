@@ -56,7 +56,16 @@ struct BadFile {
 const BadFile kBadFiles[] = {
     {"unknown_top_key.yaml",
      ":5: gravty: unknown key; allowed keys: name, dimension, domain, gravity, fluid, sph, time, "
-     "guards, solids, fluid_blocks, diagnostics"},
+     "guards, checkpoint, frames, solids, fluid_blocks, diagnostics"},
+    {"rheology_bad_model.yaml", ":5: fluid.rheology.model: 'bingham' is not one of newtonian, hbp"},
+    {"rheology_needs_laminar.yaml",
+     ":6: fluid.rheology.model: hbp needs fluid.viscosity.model: laminar (mu_eff drives the "
+     "laminar "
+     "term)"},
+    {"frames_bad_field.yaml",
+     ":8: frames.fields[1]: 'pressure' is not one of vel, rho, press, acc, drho, mass, id"},
+    {"checkpoint_negative.yaml",
+     ":6: checkpoint.every_steps: value -5 is out of range; allowed [0, 2e9]"},
     {"unknown_nested_key.yaml",
      ":5: sph.dpp: unknown key; allowed keys: dp, h_factor, boundary, slip, boundary_layers"},
     {"unknown_deep_key.yaml",

@@ -22,13 +22,15 @@ namespace sphdem {
 namespace {
 
 // Morris' parameters, as in inputs/poiseuille_2d.yaml.
-constexpr double kL = 1e-3;    // gap, m
-constexpr double kNu = 1e-6;   // kinematic viscosity, m^2/s
-constexpr double kF = 2e-4;    // body force per unit mass, m/s^2
+constexpr double kL = 1e-3;                         // gap, m
+constexpr double kNu = 1e-6;                        // kinematic viscosity, m^2/s
+constexpr double kF = 2e-4;                         // body force per unit mass, m/s^2
 constexpr double kUmax = kF * kL * kL / (8 * kNu);  // 2.5e-5 m/s
 constexpr double kPiD = 3.14159265358979323846;
 
-std::string poiseuille_scene() { return std::string(SPHDEM_SOURCE_DIR) + "/inputs/poiseuille_2d.yaml"; }
+std::string poiseuille_scene() {
+  return std::string(SPHDEM_SOURCE_DIR) + "/inputs/poiseuille_2d.yaml";
+}
 
 // The start-up series (FORMULAS.md §2), u >= 0 for F > 0; `terms` odd terms.
 double u_series(double z, double t, double F = kF, double nu = kNu, double L = kL,
@@ -43,9 +45,9 @@ double u_series(double z, double t, double F = kF, double nu = kNu, double L = k
 }
 
 struct ProfileError {
-  double t = 0;     // the solver time the profile was taken at
-  double l2 = 0;    // sqrt(sum (u_sph - u_ref)^2 / sum u_ref^2) over the bins
-  double max_abs = 0;  // largest |u_sph - u_ref| over the bins, m/s
+  double t = 0;                     // the solver time the profile was taken at
+  double l2 = 0;                    // sqrt(sum (u_sph - u_ref)^2 / sum u_ref^2) over the bins
+  double max_abs = 0;               // largest |u_sph - u_ref| over the bins, m/s
   double u_mid = 0, u_mid_ref = 0;  // the two bins at the centre line, averaged
   int bins = 0;
 };
@@ -137,6 +139,18 @@ void print_profiles(const char* what, const PoiseuilleRun& r) {
         e.t, e.bins, e.l2, e.max_abs, e.max_abs / kUmax, e.u_mid, e.u_mid_ref);
 }
 
+// The shipped scene with the periodic length halved (x in [0, 0.5 mm]: 20 columns of 40 particles
+// across, the flow is uniform along x) to halve the cost, and the symplectic integrator (see the
+// note on Verlet at the end).
+std::vector<std::string> narrow_channel(std::vector<std::string> extra) {
+  std::vector<std::string> ov = {"time.integrator=symplectic", "domain.hi=[5e-4,1e-3,1.2e-3]",
+                                 "fluid_blocks[0].hi=[5e-4,0,1e-3]",
+                                 "diagnostics.profiles[0].from=[2.5e-4,0,0]",
+                                 "diagnostics.profiles[0].to=[2.5e-4,0,1e-3]"};
+  ov.insert(ov.end(), extra.begin(), extra.end());
+  return ov;
+}
+
 // The series as coded here reproduces the tabulated reference (and so FORMULAS.md §2).
 TEST(PoiseuilleReference, SeriesMatchesTabulatedProfiles) {
   std::ifstream f(std::string(SPHDEM_REFERENCE_DATA) +
@@ -161,17 +175,16 @@ TEST(PoiseuilleReference, SeriesMatchesTabulatedProfiles) {
   EXPECT_LT(worst, 1e-4 * kUmax);
 }
 
-// The shipped scene (40 particles across) with the symplectic integrator; see the note on
-// Verlet below.
+// 40 particles across, profiles at t = 0.045 s, 0.225 s and 1 s; L2 under 2 % at all three
+// (measured when written: 0.96 %, 1.01 %, 1.02 %).
 TEST(Poiseuille, StartupProfileMatchesSeries) {
-  const PoiseuilleRun r =
-      run_poiseuille({"time.integrator=symplectic"}, {0.045, 0.225, 1.0}, kF, kNu);
+  const PoiseuilleRun r = run_poiseuille(narrow_channel({}), {0.045, 0.225, 1.0}, kF, kNu);
   print_profiles("Poiseuille 2D, 40 across, symplectic", r);
   ASSERT_FALSE(r.unstable) << r.failure;
   ASSERT_EQ(r.profiles.size(), 3u);
   EXPECT_EQ(r.profiles[0].bins, 40);
-  EXPECT_LT(r.profiles[0].l2, 0.03);  // t = 0.045 s
-  EXPECT_LT(r.profiles[1].l2, 0.03);  // t = 0.225 s
+  EXPECT_LT(r.profiles[0].l2, 0.02);  // t = 0.045 s
+  EXPECT_LT(r.profiles[1].l2, 0.02);  // t = 0.225 s
   EXPECT_LT(r.profiles[2].l2, 0.02);  // t = 1 s, steady to e^-9.9
   EXPECT_NEAR(r.profiles[2].u_mid / kUmax, r.profiles[2].u_mid_ref / kUmax, 0.02);
 }
@@ -180,17 +193,19 @@ TEST(Poiseuille, StartupProfileMatchesSeries) {
 // profile at t = 0.1125 s is far from the series for the original viscosity.
 TEST(Poiseuille, ComparatorFailsWithDoubledViscosity) {
   const PoiseuilleRun r = run_poiseuille(
-      {"time.integrator=symplectic", "fluid.viscosity={model: laminar, nu: 2e-6}"}, {0.1125}, kF,
-      kNu);
+      narrow_channel({"fluid.viscosity={model: laminar, nu: 2e-6}"}), {0.1125}, kF, kNu);
   print_profiles("Poiseuille 2D, nu doubled, compared with the original nu", r);
   ASSERT_FALSE(r.unstable) << r.failure;
   ASSERT_EQ(r.profiles.size(), 1u);
   EXPECT_GT(r.profiles[0].l2, 0.1);
 }
 
-// The shipped scene as it is (Verlet integrator). Disabled: Verlet's leapfrog update
-// v^{n+1} = v^{n-1} + 2 dt a^n is unconditionally unstable for the laminar viscous term (a
-// diffusion equation), and the run stops on the Mach guard within a few dozen steps.
+// The shipped scene as it is (Verlet integrator). Disabled until the solver is fixed: Verlet's
+// leapfrog update v^{n+1} = v^{n-1} + 2 dt a^n is unstable for the laminar viscous term (for
+// du/dt = -lambda u it is Richardson's scheme, unstable for every dt; the Euler step every 40
+// steps does not damp it). A sign-alternating mode grows from the plates (|u| 2e2 u_max at the
+// second row by step 22) and the run stops on the Mach guard at t = 0.00495 s, step 22. The same
+// scene with time.integrator=symplectic, or verlet_euler_every=1, is stable.
 TEST(Poiseuille, DISABLED_ShippedSceneWithVerletStaysStable) {
   const PoiseuilleRun r = run_poiseuille({}, {0.045}, kF, kNu);
   print_profiles("Poiseuille 2D, 40 across, verlet", r);

@@ -1,0 +1,460 @@
+// DemSystem: broad phase, level-set narrow phase, contact history and stepping (dem_system.hpp).
+#include "dem/dem_system.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <string>
+
+#include "core/error.hpp"
+#include "core/exec.hpp"
+#include "neighbor/cell_grid.hpp"
+#include "neighbor/cell_list.hpp"
+
+namespace sphdem::dem {
+
+namespace {
+
+struct HistEntry {
+  ContactKey key;
+  Vec3 spring;
+};
+
+// Collects force on a body at point xc and its torque about the centroid x.
+struct Load {
+  Vec3 f, t;
+  void add(const Vec3& force, const Vec3& xc, const Vec3& x) {
+    f += force;
+    t += cross(xc - x, force);
+  }
+};
+
+// for_each on the host space, but a plain loop for short ranges: a parallel region costs more
+// than a few bodies' work, and much more when the cores are shared.
+constexpr Index kSerialBelow = 64;
+template <class F>
+void run_each(Index n, const F& f) {
+  if (n < kSerialBelow) {
+    for (Index i = 0; i < n; ++i) f(i);
+  } else {
+    for_each(Host{}, n, f);
+  }
+}
+
+Real wall_phi(const Wall& w, const Vec3& x) {
+  return w.sdf ? w.sdf->phi(x - w.offset) : dot(x - w.point, w.normal);
+}
+Vec3 wall_normal(const Wall& w, const Vec3& x) {
+  if (!w.sdf) return w.normal;
+  const Vec3 g = w.sdf->grad(x - w.offset);
+  const Real l = norm(g);
+  return l > 0 ? g / l : Vec3(0, 0, 1);
+}
+
+}  // namespace
+
+struct DemSystem::PairOut {
+  Load a, b;
+  Real max_d = 0;
+  std::vector<HistEntry> hist;
+};
+
+DemSystem::DemSystem(const DemParams& params) {
+  set_params(params);
+}
+
+void DemSystem::set_params(const DemParams& p) {
+  params_ = p;
+  auto alpha = [](const ContactModel& m) {
+    if (m.law != NormalLaw::kHertz) return Real(0);
+    if (!(m.young > 0)) throw InputError("DEM: the Hertz law needs a positive Young's modulus");
+    return hertz_damping_alpha(m.restitution);
+  };
+  for (const ContactModel* m : {&p.grain_grain, &p.grain_wall}) {
+    if (!(m->restitution > 0 && m->restitution <= 1))
+      throw InputError("DEM: restitution coefficient must be in (0, 1], got " +
+                       std::to_string(m->restitution));
+    if (!(m->mu >= 0)) throw InputError("DEM: friction coefficient must be >= 0");
+    if (!(m->kn > 0) && !(m->young > 0))
+      throw InputError("DEM: a contact model needs kn > 0 or a Young's modulus");
+  }
+  alpha_gg_ = alpha(p.grain_grain);
+  alpha_gw_ = alpha(p.grain_wall);
+}
+
+int DemSystem::add_template(GrainTemplate t) {
+  templates_.push_back(std::make_shared<const GrainTemplate>(std::move(t)));
+  return int(templates_.size()) - 1;
+}
+
+std::size_t DemSystem::add_body(int shape, Real rho, Vec3 x, Quat q, Vec3 v, Vec3 w_world,
+                                Motion motion) {
+  if (shape < 0 || std::size_t(shape) >= templates_.size())
+    throw InputError("DEM: unknown grain shape " + std::to_string(shape));
+  if (!(rho > 0)) throw InputError("DEM: grain density must be positive");
+  const GrainTemplate& t = *templates_[std::size_t(shape)];
+  RigidBody b;
+  b.x = x;
+  b.q = normalize(q);
+  b.v = v;
+  b.w = rotate(conjugate(b.q), w_world);
+  b.mass = rho * t.volume();
+  b.inertia = rho * t.inertia_per_density();
+  b.motion = motion;
+  b.shape = shape;
+  b.id = next_id_++;
+  bodies_.push_back(b);
+  force_.emplace_back();
+  torque_.emplace_back();
+  ext_force_.emplace_back();
+  ext_torque_.emplace_back();
+  acc_prev_.emplace_back();
+  alpha_prev_.emplace_back();
+  return bodies_.size() - 1;
+}
+
+int DemSystem::add_plane_wall(Vec3 point, Vec3 normal, Vec3 velocity) {
+  const Real l = norm(normal);
+  if (!(l > 0)) throw InputError("DEM: wall normal must be nonzero");
+  Wall w;
+  w.point = point;
+  w.normal = normal / l;
+  w.velocity = velocity;
+  walls_.push_back(w);
+  return int(walls_.size()) - 1;
+}
+
+int DemSystem::add_sdf_wall(geom::SdfPtr sdf, Vec3 velocity) {
+  if (!sdf) throw InputError("DEM: null wall SDF");
+  Wall w;
+  w.sdf = std::move(sdf);
+  w.velocity = velocity;
+  walls_.push_back(w);
+  return int(walls_.size()) - 1;
+}
+
+void DemSystem::set_external(std::size_t i, Vec3 f, Vec3 t) {
+  ext_force_.at(i) = f;
+  ext_torque_.at(i) = t;
+}
+
+Real DemSystem::kinetic_energy() const {
+  Real e = 0;
+  for (const RigidBody& b : bodies_)
+    if (b.motion == Motion::kFree) e += dem::kinetic_energy(b);
+  return e;
+}
+
+// The contact law of bodies a and b (b = a for a wall contact, wall = true).
+PairLaw DemSystem::pair_law(const RigidBody& a, const RigidBody& b, bool wall) const {
+  const ContactModel& m = wall ? params_.grain_wall : params_.grain_grain;
+  const GrainTemplate& ta = *templates_[std::size_t(a.shape)];
+  const GrainTemplate& tb = *templates_[std::size_t(b.shape)];
+  PairLaw p;
+  p.mu = m.mu;
+  p.m_eff = wall ? contact_mass(a) : effective_mass(contact_mass(a), contact_mass(b));
+  if (!(p.m_eff > 0)) p.m_eff = a.mass;
+  const Real e_star =
+      m.young > 0 ? (wall ? effective_young(m.young, m.poisson, m.wall_young, m.wall_poisson)
+                          : effective_young(m.young, m.poisson, m.young, m.poisson))
+                  : Real(0);
+  const bool spheres = ta.is_sphere() && (wall || tb.is_sphere());
+  const Real ra = ta.is_sphere() ? ta.radius() : Real(0.5) * ta.equivalent_diameter();
+  const Real rb = tb.is_sphere() ? tb.radius() : Real(0.5) * tb.equivalent_diameter();
+  p.r_star = wall ? ra : effective_radius(ra, rb);
+  if (m.law == NormalLaw::kHertz && spheres) {
+    p.law = NormalLaw::kHertz;
+    p.k_hertz = hertz_constant(e_star, p.r_star);
+    p.alpha = wall ? alpha_gw_ : alpha_gg_;
+    p.g_star = wall ? effective_shear(m.young, m.poisson, m.wall_young, m.wall_poisson)
+                    : effective_shear(m.young, m.poisson, m.young, m.poisson);
+    p.tangential_damping = m.tangential_damping;
+    return p;
+  }
+  p.law = NormalLaw::kLinear;
+  p.kn = m.kn > 0 ? m.kn : linear_stiffness_from_young(e_star, p.r_star, m.stiffness_overlap);
+  p.kt = m.kt > 0 ? m.kt : p.kn * 2 * (1 - m.poisson) / (2 - m.poisson);
+  p.cn = linear_damping(m.restitution, p.m_eff, p.kn);
+  p.ct = m.tangential_damping ? linear_damping(m.restitution, p.m_eff, p.kt) : Real(0);
+  return p;
+}
+
+const Vec3* DemSystem::find_spring(const ContactKey& k) const {
+  const auto it = std::lower_bound(hist_keys_.begin(), hist_keys_.end(), k);
+  if (it == hist_keys_.end() || !(*it == k)) return nullptr;
+  return &hist_springs_[std::size_t(it - hist_keys_.begin())];
+}
+
+void DemSystem::find_pairs() {
+  pairs_.clear();
+  const Index n = Index(bodies_.size());
+  if (n < 2) return;
+  std::vector<Vec3> pos(static_cast<std::size_t>(n));
+  std::vector<GlobalId> ids(static_cast<std::size_t>(n));
+  std::vector<Real> rad(static_cast<std::size_t>(n));
+  const Real inf = std::numeric_limits<Real>::max();
+  Vec3 lo(inf, inf, inf), hi(-inf, -inf, -inf);
+  Real rmax = 0;
+  for (Index i = 0; i < n; ++i) {
+    const RigidBody& b = bodies_[std::size_t(i)];
+    if (!std::isfinite(b.x.x) || !std::isfinite(b.x.y) || !std::isfinite(b.x.z))
+      throw StabilityError("DEM: grain " + std::to_string(b.id) +
+                           " has a non-finite position at t = " + std::to_string(time_) +
+                           " s (time step too large for the contact stiffness?)");
+    pos[std::size_t(i)] = b.x;
+    ids[std::size_t(i)] = GlobalId(i);
+    rad[std::size_t(i)] = templates_[std::size_t(b.shape)]->bounding_radius();
+    rmax = std::max(rmax, rad[std::size_t(i)]);
+    for (int d = 0; d < 3; ++d) {
+      lo[d] = std::min(lo[d], b.x[d]);
+      hi[d] = std::max(hi[d], b.x[d]);
+    }
+  }
+  if (n < kSerialBelow) {
+    // Few bodies: all pairs, in (i, j) order like the cell-list path.
+    for (Index i = 0; i < n; ++i)
+      for (Index j = i + 1; j < n; ++j) {
+        const RigidBody& a = bodies_[std::size_t(i)];
+        const RigidBody& b = bodies_[std::size_t(j)];
+        if (a.motion != Motion::kFree && b.motion != Motion::kFree) continue;
+        const Real reach = rad[std::size_t(i)] + rad[std::size_t(j)];
+        if (norm2(a.x - b.x) < reach * reach)
+          pairs_.emplace_back(std::uint32_t(i), std::uint32_t(j));
+      }
+    return;
+  }
+  Real cell = 2 * rmax;
+  for (int d = 0; d < 3; ++d) {
+    lo[d] -= cell;
+    hi[d] += cell;
+  }
+  // Keep the cell count near the body count even when bodies are far apart.
+  const Real vol = (hi.x - lo.x) * (hi.y - lo.y) * (hi.z - lo.z);
+  if (vol / (cell * cell * cell) > Real(8) * Real(n) + Real(64))
+    cell = std::cbrt(vol / (Real(8) * Real(n) + Real(64)));
+  const bool periodic[3] = {false, false, false};
+  const CellGrid grid = make_cell_grid(3, lo, hi, cell, periodic);
+  CellList<Host> cl;
+  sort_cells(Host{}, grid, pos.data(), ids.data(), GlobalId(n), 0, n, cl);
+  std::vector<Vec3> spos(static_cast<std::size_t>(n));
+  std::vector<std::uint32_t> sidx(static_cast<std::size_t>(n));
+  for (Index i = 0; i < n; ++i) {
+    sidx[std::size_t(i)] = cl.order[std::size_t(i)];
+    spos[std::size_t(i)] = pos[cl.order[std::size_t(i)]];
+  }
+  mark_cells(Host{}, grid, cl);
+  const CellListView view = cl.view();
+  std::vector<std::vector<std::uint32_t>> nb(static_cast<std::size_t>(n));
+  const Real r2 = cell * cell;
+  for_each(Host{}, n, [&](Index i) {
+    const RigidBody& a = bodies_[std::size_t(i)];
+    auto& out = nb[std::size_t(i)];
+    for_each_neighbor(grid, view, spos.data(), a.x, r2, [&](Index j, const Vec3& rij, Real rr) {
+      const std::uint32_t bj = sidx[std::size_t(j)];
+      if (Index(bj) <= i) return;
+      const RigidBody& b = bodies_[bj];
+      if (a.motion != Motion::kFree && b.motion != Motion::kFree) return;
+      const Real reach = rad[std::size_t(i)] + rad[bj];
+      if (rr < reach * reach) out.push_back(bj);
+      (void)rij;
+    });
+    std::sort(out.begin(), out.end());
+  });
+  for (Index i = 0; i < n; ++i)
+    for (std::uint32_t j : nb[std::size_t(i)]) pairs_.emplace_back(std::uint32_t(i), j);
+}
+
+void DemSystem::compute_forces(Real dt) {
+  const std::size_t n = bodies_.size();
+  // Velocities predicted to the force time: the leapfrog carries v at half steps, so the dashpots
+  // see v + a_prev dt/2 (second order for the damping; see DemSystem::step).
+  eval_ = bodies_;
+  for (std::size_t i = 0; i < n; ++i)
+    if (eval_[i].motion == Motion::kFree) {
+      eval_[i].v += Real(0.5) * dt * acc_prev_[i];
+      eval_[i].w += Real(0.5) * dt * alpha_prev_[i];
+    }
+  find_pairs();
+  const Index np = Index(pairs_.size());
+  std::vector<PairOut> pout(static_cast<std::size_t>(np));
+
+  // ---- pairs of grains (each pair writes only its own slot) ----
+  run_each(np, [&](Index pi) {
+    PairOut& out = pout[std::size_t(pi)];
+    const RigidBody& a = eval_[pairs_[std::size_t(pi)].first];
+    const RigidBody& b = eval_[pairs_[std::size_t(pi)].second];
+    const GrainTemplate& ta = *templates_[std::size_t(a.shape)];
+    const GrainTemplate& tb = *templates_[std::size_t(b.shape)];
+    const PairLaw law = pair_law(a, b, false);
+    if (ta.is_sphere() && tb.is_sphere()) {
+      // Fast path: one analytic contact point on the line of centres.
+      const Vec3 ab = a.x - b.x;
+      const Real dist = norm(ab);
+      const Real d = ta.radius() + tb.radius() - dist;
+      if (!(d > 0) || !(dist > 0)) return;
+      const Vec3 nrm = ab / dist;
+      const Vec3 xc = b.x + nrm * (tb.radius() - Real(0.5) * d);
+      const Vec3 v_rel = point_velocity(a, xc) - point_velocity(b, xc);
+      const ContactKey key{a.id, b.id, kCentreNode};
+      const Vec3* old = find_spring(key);
+      Vec3 s = old ? *old : Vec3();
+      const Vec3 f = contact_force(law, d, nrm, v_rel, dt, s, nullptr);
+      out.a.add(f, xc, a.x);
+      out.b.add(-f, xc, b.x);
+      out.max_d = d;
+      out.hist.push_back({key, s});
+      return;
+    }
+    // Level-set master-slave test in both orders, each with weight 1/2.
+    auto pass = [&](const RigidBody& m, const GrainTemplate& tm, const RigidBody& s,
+                    const GrainTemplate& ts, Load& load_m, Load& load_s) {
+      const geom::GridSdfView phi_s = ts.view();
+      const Quat qs_inv = conjugate(s.q);
+      const Real reach2 = ts.bounding_radius() * ts.bounding_radius();
+      const auto& nodes = tm.nodes();
+      for (std::size_t k = 0; k < nodes.size(); ++k) {
+        const Vec3 x = m.x + rotate(m.q, nodes[k]);
+        if (norm2(x - s.x) > reach2) continue;
+        const Vec3 y = rotate(qs_inv, x - s.x);
+        const Real ph = geom::grid_phi(phi_s, y);
+        if (!(ph < 0)) continue;
+        const Vec3 nb = geom::grid_normal(phi_s, y);
+        if (norm2(nb) == 0) continue;
+        const Vec3 nrm = rotate(s.q, nb);
+        const Real d = -ph;
+        const Vec3 v_rel = point_velocity(m, x) - point_velocity(s, x);
+        const ContactKey key{m.id, s.id, std::uint32_t(k)};
+        const Vec3* old = find_spring(key);
+        Vec3 spring = old ? *old : Vec3();
+        const Vec3 f = Real(0.5) * contact_force(law, d, nrm, v_rel, dt, spring, nullptr);
+        load_m.add(f, x, m.x);
+        load_s.add(-f, x, s.x);
+        out.max_d = std::max(out.max_d, d);
+        out.hist.push_back({key, spring});
+      }
+    };
+    pass(a, ta, b, tb, out.a, out.b);
+    pass(b, tb, a, ta, out.b, out.a);
+  });
+
+  // ---- per-body gather: walls, then the body's pairs in pair order ----
+  std::vector<std::vector<std::pair<std::uint32_t, bool>>> mine(n);
+  for (Index pi = 0; pi < np; ++pi) {
+    mine[pairs_[std::size_t(pi)].first].emplace_back(std::uint32_t(pi), true);
+    mine[pairs_[std::size_t(pi)].second].emplace_back(std::uint32_t(pi), false);
+  }
+  std::vector<std::vector<HistEntry>> whist(n);
+  std::vector<Real> wmax(n, Real(0));
+  run_each(Index(n), [&](Index ii) {
+    const std::size_t i = std::size_t(ii);
+    const RigidBody& b = eval_[i];
+    Load load;
+    if (b.motion == Motion::kFree) {
+      const GrainTemplate& t = *templates_[std::size_t(b.shape)];
+      const PairLaw law = pair_law(b, b, true);
+      for (std::size_t w = 0; w < walls_.size(); ++w) {
+        const Wall& wall = walls_[w];
+        const Real phc = wall_phi(wall, b.x);
+        if (phc > t.bounding_radius()) continue;
+        const GlobalId wkey = kWallKeyBit | GlobalId(w);
+        if (t.is_sphere()) {
+          const Real d = t.radius() - phc;
+          if (!(d > 0)) continue;
+          const Vec3 nrm = wall_normal(wall, b.x);
+          const Vec3 xc = b.x - nrm * (t.radius() - Real(0.5) * d);
+          const Vec3 v_rel = point_velocity(b, xc) - wall.velocity;
+          const ContactKey key{b.id, wkey, kCentreNode};
+          const Vec3* old = find_spring(key);
+          Vec3 s = old ? *old : Vec3();
+          load.add(contact_force(law, d, nrm, v_rel, dt, s, nullptr), xc, b.x);
+          wmax[i] = std::max(wmax[i], d);
+          whist[i].push_back({key, s});
+          continue;
+        }
+        const auto& nodes = t.nodes();
+        for (std::size_t k = 0; k < nodes.size(); ++k) {
+          const Vec3 x = b.x + rotate(b.q, nodes[k]);
+          const Real ph = wall_phi(wall, x);
+          if (!(ph < 0)) continue;
+          const Vec3 nrm = wall_normal(wall, x);
+          const Vec3 v_rel = point_velocity(b, x) - wall.velocity;
+          const ContactKey key{b.id, wkey, std::uint32_t(k)};
+          const Vec3* old = find_spring(key);
+          Vec3 s = old ? *old : Vec3();
+          load.add(contact_force(law, -ph, nrm, v_rel, dt, s, nullptr), x, b.x);
+          wmax[i] = std::max(wmax[i], -ph);
+          whist[i].push_back({key, s});
+        }
+      }
+    }
+    for (const auto& [pi, is_a] : mine[i]) {
+      const Load& l = is_a ? pout[pi].a : pout[pi].b;
+      load.f += l.f;
+      load.t += l.t;
+    }
+    force_[i] = load.f;
+    torque_[i] = load.t;
+  });
+
+  // ---- new contact history, sorted by key ----
+  std::vector<HistEntry> all;
+  max_overlap_ = 0;
+  for (const PairOut& p : pout) {
+    all.insert(all.end(), p.hist.begin(), p.hist.end());
+    max_overlap_ = std::max(max_overlap_, p.max_d);
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    all.insert(all.end(), whist[i].begin(), whist[i].end());
+    max_overlap_ = std::max(max_overlap_, wmax[i]);
+  }
+  std::sort(all.begin(), all.end(),
+            [](const HistEntry& x, const HistEntry& y) { return x.key < y.key; });
+  hist_keys_.resize(all.size());
+  hist_springs_.resize(all.size());
+  for (std::size_t k = 0; k < all.size(); ++k) {
+    hist_keys_[k] = all[k].key;
+    hist_springs_[k] = all[k].spring;
+  }
+}
+
+void DemSystem::step(Real dt) {
+  compute_forces(dt);
+  const Vec3 g = params_.gravity;
+  run_each(Index(bodies_.size()), [&](Index i) {
+    const std::size_t k = std::size_t(i);
+    RigidBody& b = bodies_[k];
+    const Vec3 v0 = b.v, w0 = b.w;
+    integrate_body(b, force_[k] + ext_force_[k], torque_[k] + ext_torque_[k], g, dt);
+    acc_prev_[k] = (b.v - v0) / dt;
+    alpha_prev_[k] = (b.w - w0) / dt;
+  });
+  for (Wall& w : walls_) {
+    w.point += dt * w.velocity;
+    w.offset += dt * w.velocity;
+  }
+  time_ += dt;
+}
+
+Real DemSystem::time_step() const {
+  Real dt = std::numeric_limits<Real>::max();
+  for (const RigidBody& b : bodies_) {
+    if (b.motion != Motion::kFree) continue;
+    for (int wall = 0; wall < 2; ++wall) {
+      const PairLaw p = pair_law(b, b, wall == 1);
+      // Grain-grain: two equal grains, m* = m/2; grain-wall: m* = m.
+      const Real m_eff = wall ? b.mass : Real(0.5) * b.mass;
+      Real tc;
+      if (p.law == NormalLaw::kHertz) {
+        const Real e_star = Real(0.75) * p.k_hertz / std::sqrt(p.r_star);
+        tc = hertz_contact_time(e_star, p.r_star, m_eff, params_.reference_speed);
+      } else {
+        tc = contact_time(m_eff, p.kn * std::max(Real(1), params_.nodes_per_contact));
+      }
+      dt = std::min(dt, tc / Real(50));
+    }
+  }
+  return dt;
+}
+
+}  // namespace sphdem::dem

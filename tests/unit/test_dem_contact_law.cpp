@@ -1,0 +1,178 @@
+// Unit tests of the DEM contact laws (lib/dem/contact_law.hpp; seed Eqs. 19-20, FORMULAS.md §7-8).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "dem/contact_law.hpp"
+
+namespace sphdem::dem {
+namespace {
+
+std::vector<std::vector<double>> read_numeric_csv(const std::string& path) {
+  std::ifstream f(path);
+  EXPECT_TRUE(f.good()) << path;
+  std::vector<std::vector<double>> rows;
+  std::string line;
+  bool header = true;
+  while (std::getline(f, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    if (header) {
+      header = false;
+      continue;
+    }
+    std::vector<double> r;
+    std::stringstream ss(line);
+    std::string cell;
+    while (std::getline(ss, cell, ',')) r.push_back(std::stod(cell));
+    rows.push_back(r);
+  }
+  return rows;
+}
+
+// A linear spring-dashpot contact integrated like DemSystem::step: symplectic Euler, with the
+// dashpot fed the velocity predicted to the force time, v + a_prev dt/2. Returns the restitution
+// coefficient and the contact duration (overlap > 0).
+void bounce_linear(Real e, Real m, Real kn, Real dt, Real* e_out, Real* tc_out) {
+  const Real cn = linear_damping(e, m, kn);
+  const Real v0 = 1;
+  Real d = 0, v = v0;  // v = d' (approach speed), starts at first touch
+  Real t = 0;
+  Real d_prev = 0, t_prev = 0, a_prev = 0;
+  for (int k = 0; k < 10000000; ++k) {
+    const Real f = linear_normal_force(kn, cn, d, -(v + Real(0.5) * dt * a_prev));  // v_n = -d'
+    a_prev = -f / m;
+    v += dt * a_prev;
+    d_prev = d;
+    t_prev = t;
+    d += dt * v;
+    t += dt;
+    if (d <= 0) break;
+  }
+  *e_out = -v / v0;
+  *tc_out = t_prev + dt * d_prev / (d_prev - d);  // linear interpolation of the exit
+}
+
+TEST(DemContactLaw, DampingRatioMatchesReferenceTable) {
+  const auto rows = read_numeric_csv(std::string(SPHDEM_REFERENCE_DATA) +
+                                     "/analytic/linear_spring_dashpot_restitution.csv");
+  ASSERT_GE(rows.size(), 10u);
+  for (const auto& r : rows) {
+    const Real zeta = damping_ratio_from_restitution(Real(r[0]));
+    EXPECT_NEAR(zeta, r[1], 2e-6 * std::max(1.0, r[1])) << "e = " << r[0];
+    // t_c sqrt(k/m) = pi / sqrt(1 - zeta^2)
+    EXPECT_NEAR(kPi / std::sqrt(1 - zeta * zeta), r[4], 1e-4 * r[4]) << "e = " << r[0];
+  }
+  EXPECT_EQ(damping_ratio_from_restitution(1), 0);
+  EXPECT_EQ(damping_ratio_from_restitution(0), 1);
+}
+
+TEST(DemContactLaw, LinearBounceGivesTargetRestitutionAndDuration) {
+  const auto rows = read_numeric_csv(std::string(SPHDEM_REFERENCE_DATA) +
+                                     "/analytic/linear_spring_dashpot_restitution.csv");
+  const Real m = 0.02, kn = 3e4;
+  const Real dt = dem_time_step(m, kn) / 4;  // t_c/200
+  for (const auto& r : rows) {
+    Real e_out, tc;
+    bounce_linear(Real(r[0]), m, kn, dt, &e_out, &tc);
+    EXPECT_NEAR(e_out, r[2], 0.01 * r[2]) << "e = " << r[0];
+    EXPECT_NEAR(tc / std::sqrt(m / kn), r[3], 0.01 * r[3]) << "e = " << r[0];
+  }
+}
+
+TEST(DemContactLaw, ContactTimeAndStep) {
+  const Real m = 0.5, kn = 2e5;
+  EXPECT_DOUBLE_EQ(contact_time(m, kn), kPi * std::sqrt(m / kn));
+  EXPECT_DOUBLE_EQ(dem_time_step(m, kn), kPi * std::sqrt(m / kn) / 50);
+  EXPECT_DOUBLE_EQ(effective_mass(2, 2), 1);
+  EXPECT_DOUBLE_EQ(effective_mass(2, 0), 2);  // wall
+  EXPECT_DOUBLE_EQ(effective_radius(0.01, 0.01), 0.005);
+  EXPECT_DOUBLE_EQ(effective_radius(0.1, 0), 0.1);  // plane
+}
+
+TEST(DemContactLaw, StiffnessFromYoungForTable2) {
+  // Table 2: E = 6e8 Pa, nu = 0.3, grains of 16 mm: E* = E / (2 (1 - nu^2)), R* = 4 mm.
+  const Real e_star = effective_young(6e8, 0.3, 6e8, 0.3);
+  EXPECT_NEAR(e_star, 6e8 / (2 * 0.91), 1e-6 * e_star);
+  EXPECT_NEAR(effective_young(7e10, 0.3, 0, 0), 7.69231e10, 1e-5 * 7.69231e10);  // Chung & Ooi
+  const Real kn = linear_stiffness_from_young(e_star, effective_radius(0.008, 0.008), 1e-2);
+  EXPECT_NEAR(kn, 1.758e5, 0.001 * 1.758e5);
+  // Consistency: the Hertz force at the reference overlap equals kn times that overlap.
+  const Real r_star = 0.004, dref = 1e-2 * r_star;
+  EXPECT_NEAR(hertz_constant(e_star, r_star) * std::pow(dref, 1.5), kn * dref, 1e-9 * kn * dref);
+}
+
+TEST(DemContactLaw, HertzMatchesChungOoiAnalyticTable) {
+  // Glass, Test 1: E* = 2.5e10, R* = 0.005, m* = 0.00586431, v = 20 -> 274.113 um, 10696.9 N.
+  const Real d = hertz_max_overlap(2.5e10, 0.005, 0.00586431, 20);
+  EXPECT_NEAR(d, 0.000274113, 1e-5 * 0.000274113);
+  EXPECT_NEAR(hertz_normal_force(hertz_constant(2.5e10, 0.005), 0, 0, d, 0), 10696.9, 0.5);
+  EXPECT_NEAR(hertz_contact_time(2.5e10, 0.005, 0.00586431, 20), 4.03395e-05, 1e-3 * 4.03395e-05);
+}
+
+TEST(DemContactLaw, HertzDampingInverts) {
+  EXPECT_EQ(hertz_damping_alpha(1), 0);
+  EXPECT_NEAR(hertz_restitution(0), 1.0, 1e-6);
+  Real prev = 0;
+  for (Real e : {0.9, 0.7, 0.5, 0.3, 0.1}) {
+    const Real a = hertz_damping_alpha(e);
+    EXPECT_GT(a, prev) << "alpha must grow as e falls";
+    prev = a;
+    EXPECT_NEAR(hertz_restitution(a), e, 1e-6) << "e = " << e;
+  }
+}
+
+TEST(DemContactLaw, TangentialSpringSticksThenSlidesAtTheCap) {
+  const Vec3 n(0, 0, 1);
+  const Real kt = 1000, mu = 0.5, fn = 10, dt = 1e-3;
+  Vec3 s;
+  // Stick: force -kt s, s = v t.
+  Vec3 f = tangential_force(s, n, Vec3(1, 0, 0), dt, kt, 0, mu, fn);
+  EXPECT_NEAR(s.x, 1e-3, 1e-15);
+  EXPECT_NEAR(f.x, -1.0, 1e-12);
+  EXPECT_NEAR(f.y, 0, 1e-15);
+  // The normal part of v_rel does not load the spring.
+  f = tangential_force(s, n, Vec3(0, 0, 5), dt, kt, 0, mu, fn);
+  EXPECT_NEAR(f.x, -1.0, 1e-12);
+  // Slide: a large displacement is capped at mu fn and the spring rescaled to match.
+  f = tangential_force(s, n, Vec3(0, 100, 0), dt, kt, 0, mu, fn);
+  EXPECT_NEAR(norm(f), mu * fn, 1e-12);
+  EXPECT_LT(f.y, 0);
+  EXPECT_NEAR(norm(s), mu * fn / kt, 1e-15);
+  EXPECT_NEAR(s.y, -f.y / kt, 1e-15);
+  // A rotated contact plane: the spring is projected and keeps its length.
+  Vec3 s2(1e-3, 0, 0);
+  const Vec3 n2 = Vec3(0.1, 0, 1) / norm(Vec3(0.1, 0, 1));
+  tangential_force(s2, n2, Vec3(0, 0, 0), dt, kt, 0, mu, fn);
+  EXPECT_NEAR(dot(s2, n2), 0, 1e-15);
+  EXPECT_NEAR(norm(s2), 1e-3, 1e-15);
+}
+
+TEST(DemContactLaw, ContactForcePushesMasterOutAndDampsApproach) {
+  PairLaw p;
+  p.kn = 1e4;
+  p.cn = 10;
+  p.kt = 5e3;
+  p.mu = 0.3;
+  p.m_eff = 1;
+  Vec3 s;
+  Real fn;
+  // Approaching (v_n < 0): the dashpot adds to the spring.
+  const Vec3 f = contact_force(p, 1e-3, Vec3(0, 0, 1), Vec3(0, 0, -1), 1e-4, s, &fn);
+  EXPECT_NEAR(fn, 10 + 10, 1e-12);
+  EXPECT_NEAR(f.z, 20, 1e-12);
+  // Hertz law through the same entry point.
+  p.law = NormalLaw::kHertz;
+  p.k_hertz = hertz_constant(1e9, 0.01);
+  p.g_star = 1e8;
+  p.r_star = 0.01;
+  Vec3 s2;
+  const Vec3 fh = contact_force(p, 1e-4, Vec3(1, 0, 0), Vec3(0, 0, 0), 1e-4, s2, &fn);
+  EXPECT_NEAR(fh.x, p.k_hertz * 1e-6, 1e-9 * p.k_hertz * 1e-6);
+}
+
+}  // namespace
+}  // namespace sphdem::dem

@@ -1,0 +1,147 @@
+// Level-set contact (DemSystem narrow phase, seed Eq. 19 with Kawamoto's master-slave test in both
+// orders): symmetry between two identical non-spherical grains, the force of a face-to-face
+// overlap, walls given as SDFs, the time step, and the contact history keyed by body ids.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <random>
+
+#include "dem/dem_system.hpp"
+
+namespace sphdem::dem {
+namespace {
+
+DemParams static_params(Real kn) {
+  DemParams p;
+  p.gravity = Vec3(0, 0, 0);
+  p.grain_grain.kn = kn;
+  p.grain_grain.restitution = 0.5;
+  p.grain_grain.mu = 0.4;
+  p.grain_wall = p.grain_grain;
+  return p;
+}
+
+Quat random_quat(std::mt19937& rng) {
+  std::normal_distribution<Real> n(0, 1);
+  return normalize(Quat{n(rng), n(rng), n(rng), n(rng)});
+}
+
+TEST(DemLevelSet, IdenticalGrainsGetEqualAndOppositeForces) {
+  const GrainTemplate shape = GrainTemplate::trigonal_pyramid(0.02, 0.1, 3, 0.016);
+  std::mt19937 rng(11);
+  int checked = 0;
+  for (int trial = 0; trial < 40 && checked < 10; ++trial) {
+    const Quat qa = random_quat(rng), qb = random_quat(rng);
+    const Vec3 xa(0, 0, 0), xb(0.009, 0.002, -0.001);
+    // Order A, B and order B, A: the pair force must not depend on which body comes first.
+    DemSystem ab(static_params(1e5)), ba(static_params(1e5));
+    const int sa = ab.add_template(shape), sb = ba.add_template(shape);
+    ab.add_body(sa, 2500, xa, qa);
+    ab.add_body(sa, 2500, xb, qb);
+    ba.add_body(sb, 2500, xb, qb);
+    ba.add_body(sb, 2500, xa, qa);
+    ab.compute_forces(1e-6);
+    ba.compute_forces(1e-6);
+    const Vec3 fa = ab.force(0), fb = ab.force(1);
+    if (norm(fa) == 0) continue;
+    ++checked;
+    const Real scale = norm(fa);
+    EXPECT_LT(norm(fa + fb), 1e-12 * scale);
+    // Angular momentum balance about the origin: T_A + T_B + x_A x F_A + x_B x F_B = 0.
+    const Vec3 l = ab.torque(0) + ab.torque(1) + cross(xa, fa) + cross(xb, fb);
+    EXPECT_LT(norm(l), 1e-10 * scale * 0.01);
+    // Repulsive: A is pushed away from B.
+    EXPECT_GT(dot(fa, xa - xb), 0);
+    // Swapped order: the same force and torque on the same physical body.
+    EXPECT_LT(norm(ba.force(1) - fa), 1e-12 * scale);
+    EXPECT_LT(norm(ba.torque(1) - ab.torque(0)), 1e-12 * scale * 0.01);
+    EXPECT_LT(norm(ba.force(0) - fb), 1e-12 * scale);
+  }
+  EXPECT_GE(checked, 5) << "too few overlapping configurations";
+}
+
+TEST(DemLevelSet, FaceToFaceOverlapGivesKnTimesDepthPerNode) {
+  // Two 2 cm cubes, node spacing 2.5 mm (9 x 9 nodes per face), B on top of A overlapping by
+  // delta and shifted by 1.25 mm in x and y: 8 x 8 top nodes of A lie in B at depth delta, and
+  // 8 x 8 bottom nodes of B in A. Each pass has weight 1/2: F = (64 + 64)/2 kn delta.
+  // The phi grid (0.25 mm) is fine enough that the trilinear interpolant is exact (phi linear in
+  // z) over every cell around the penetrating nodes, which sit >= 1.25 mm from the side faces.
+  TemplateOptions opt;
+  opt.node_spacing = 0.0025;
+  opt.grid_spacing = 0.00025;
+  opt.quad_sub = 1;
+  const Real kn = 1e5, delta = 1e-4, s = 0.00125;
+  DemSystem sys(static_params(kn));
+  const int c = sys.add_template(GrainTemplate::box(Vec3(0.01, 0.01, 0.01), opt));
+  const GrainTemplate& t = sys.shape(c);
+  const Quat q = quat_from_matrix(t.source_rotation());
+  sys.add_body(c, 2500, Vec3(0, 0, 0), q);
+  sys.add_body(c, 2500, Vec3(s, s, 0.02 - delta), q);
+  sys.compute_forces(1e-6);
+  std::printf("face contact: F_z %.6f N, expected %.6f N, %zu contact points\n", sys.force(1).z,
+              64 * kn * delta, sys.contact_count());
+  EXPECT_NEAR(sys.force(1).z, 64 * kn * delta, 1e-9 * 64 * kn * delta);
+  EXPECT_NEAR(sys.force(1).x, 0, 1e-9 * 64 * kn * delta);
+  EXPECT_EQ(sys.contact_count(), 128u);
+}
+
+TEST(DemLevelSet, SdfWallMatchesPlaneWall) {
+  const GrainTemplate shape = GrainTemplate::random_polyhedron(0.016, 12, 5);
+  std::mt19937 rng(3);
+  const Quat q = random_quat(rng);
+  DemSystem a(static_params(1e5)), b(static_params(1e5));
+  const int sa = a.add_template(shape), sb = b.add_template(shape);
+  a.add_plane_wall(Vec3(0, 0, 0), Vec3(0, 0, 1));
+  b.add_sdf_wall(geom::make_plane(Vec3(0, 0, 0), Vec3(0, 0, 1)));
+  // The lowest node 20 um below the plane, sliding along +x and sinking.
+  Real zmin = 1;
+  for (const Vec3& n : shape.nodes()) zmin = std::min(zmin, rotate(q, n).z);
+  const Vec3 x0(0, 0, -zmin - 2e-5);
+  a.add_body(sa, 2500, x0, q, Vec3(0.1, 0, -0.01));
+  b.add_body(sb, 2500, x0, q, Vec3(0.1, 0, -0.01));
+  for (int k = 0; k < 20; ++k) {
+    a.step(1e-7);
+    b.step(1e-7);
+  }
+  ASSERT_GT(norm(a.force(0)), 0);
+  EXPECT_LT(norm(a.force(0) - b.force(0)), 1e-9 * norm(a.force(0)));
+  EXPECT_GT(a.force(0).z, 0);
+  EXPECT_LT(a.force(0).x, 0);  // friction opposes the sliding along +x
+}
+
+TEST(DemLevelSet, TimeStepIsContactTimeOverFifty) {
+  DemSystem sys(static_params(2e5));
+  const int s = sys.add_template(GrainTemplate::sphere(0.008));
+  sys.add_body(s, 2500, Vec3(0, 0, 0));
+  const Real m = sys.bodies()[0].mass;
+  EXPECT_NEAR(sys.time_step(), kPi * std::sqrt(0.5 * m / 2e5) / 50, 1e-15);
+}
+
+TEST(DemLevelSet, HistoryIsKeyedByBodyIdNotSlot) {
+  // A sphere sliding on a plane keeps its tangential spring when other bodies are added before
+  // the next step (ids, not array positions, find the spring again).
+  DemParams p = static_params(1e6);
+  p.gravity = Vec3(0, 0, -9.81);
+  DemSystem sys(p);
+  const int s = sys.add_template(GrainTemplate::sphere(0.01));
+  sys.add_plane_wall(Vec3(0, 0, 0), Vec3(0, 0, 1));
+  sys.add_body(s, 2500, Vec3(0, 0, 0.0099999), Quat{}, Vec3(1e-3, 0, 0));
+  for (int k = 0; k < 20; ++k) sys.step(1e-5);
+  ASSERT_EQ(sys.contact_count(), 1u);
+  const Vec3 spring = sys.history_springs()[0];
+  EXPECT_GT(norm(spring), 0);
+  sys.add_body(s, 2500, Vec3(1, 1, 1));
+  sys.add_body(s, 2500, Vec3(1, 1, 1.015));  // a second contact, between two new bodies
+  sys.compute_forces(0);                     // dt = 0: springs carried over, not advanced
+  ASSERT_EQ(sys.contact_count(), 2u);
+  const auto& keys = sys.history_keys();
+  for (std::size_t k = 0; k < keys.size(); ++k)
+    if (keys[k].master == sys.bodies()[0].id) {
+      EXPECT_LT(norm(sys.history_springs()[k] - spring), 1e-15);
+    }
+}
+
+}  // namespace
+}  // namespace sphdem::dem
