@@ -173,10 +173,13 @@ class Solver final : public SolverBase {
         Space{}, nf, SPHDEM_LAMBDA(Index i) { return v.rho[i]; });
     st.rho_max = reduce<MaxOp, Real>(
         Space{}, nf, SPHDEM_LAMBDA(Index i) { return v.rho[i]; });
-    st.max_speed = std::sqrt(vmax2);
+    if (nf == 0) {  // every fluid particle has left through the open ends
+      st.rho_min = st.rho_max = p_.eos.rho0;
+    }
+    st.max_speed = std::sqrt(std::max(vmax2, Real(0)));
     const Real h = p_.h;
     st.dt_force = amax2 > 0 ? std::sqrt(h / std::sqrt(amax2)) : Real(1e30);
-    st.dt_acoustic = h / (p_.eos.c0 + rmax);
+    st.dt_acoustic = h / (p_.eos.c0 + std::max(rmax, Real(0)));
     st.dt_viscous = p_.laminar && p_.nu > 0 ? Real(0.125) * h * h / p_.nu : Real(1e30);
     if (p_.hbp) {
       // Explicit viscous limit with the largest mu_eff / rho (kinematic).
