@@ -428,7 +428,9 @@ void check_scene(const Scene& scene, std::ostream& os) {
   const Real g = std::max(p.g_mag, Real(1e-12));
   const Real dt_f = std::sqrt(p.h / g);
   const Real dt_cv = p.h / c0;
-  const Real dt_v = p.laminar && p.nu > 0 ? Real(0.125) * p.h * p.h / p.nu : Real(1e30);
+  Real dt_v = p.laminar && p.nu > 0 ? Real(0.125) * p.h * p.h / p.nu : Real(1e30);
+  // HBP: the viscous limit follows the largest mu_eff; mu_max bounds it (a pessimistic estimate).
+  if (p.hbp) dt_v = Real(0.125) * p.h * p.h / (p.hbp_params.mu_max / p.eos.rho0);
   Real dt = std::min(scene.time.cfl * std::min(dt_f, dt_cv), dt_v);
   if (scene.time.dt_fixed > 0) dt = scene.time.dt_fixed;
   const double steps = std::ceil(scene.time.end / dt);

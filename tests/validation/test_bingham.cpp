@@ -4,7 +4,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <chrono>
 #include <cstdio>
+#include <fstream>
 #include <sstream>
 #include <vector>
 
@@ -32,10 +34,14 @@ struct Exact {
 struct Result {
   double l2 = 0, plug_half = 0, flow = 0, flow_exact = 0, plug_exact = 0;
   std::int64_t steps = 0;
+  double wall = 0;
 };
 
 // Runs the channel to t_end and compares the binned x-velocity profile with the exact one.
-Result run_channel(const std::vector<std::string>& ov, const Exact& ex) {
+// If `profile_csv` is given, the binned profile and the exact one are written there.
+Result run_channel(const std::vector<std::string>& ov, const Exact& ex,
+                   const std::string& profile_csv = "") {
+  const auto start = std::chrono::steady_clock::now();
   const Scene scene = load_scene(kScene, ov);
   std::ostringstream log;
   auto solver = make_solver(scene, Backend::kHost, log);
@@ -66,6 +72,11 @@ Result run_channel(const std::vector<std::string>& ov, const Exact& ex) {
     r.flow += u[b] * dp;
   }
   r.l2 = std::sqrt(e2 / n2);
+  if (!profile_csv.empty()) {
+    std::ofstream f(profile_csv);
+    f << "z,u,u_exact\n";
+    for (int b = 0; b < nb; ++b) f << z[b] << ',' << u[b] << ',' << ex.u(z[b]) << '\n';
+  }
   const double xi = ex.y0() / ex.h;
   const double mu_p = ex.K;
   r.flow_exact =
@@ -101,6 +112,7 @@ Result run_channel(const std::vector<std::string>& ov, const Exact& ex) {
   const double icpt = (sg - slope * sy) / nk;
   r.plug_half = -icpt / slope;
   r.plug_exact = ex.y0();
+  r.wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::printf(
       "  steps %lld, L2 %.4f, plug half-width %.5f m (exact %.5f), flow %.4e (exact %.4e)\n",
       static_cast<long long>(r.steps), r.l2, r.plug_half, r.plug_exact, r.flow, r.flow_exact);
@@ -110,7 +122,7 @@ Result run_channel(const std::vector<std::string>& ov, const Exact& ex) {
 // G = rho g_x = 163 Pa/m, h = 5 mm; see inputs/bingham_poiseuille_2d.yaml.
 TEST(Bingham, PlanePoiseuilleMatchesExact) {
   const Exact ex{163, 0.245, 0.1, 1, 0.005};
-  const Result r = run_channel({}, ex);
+  const Result r = run_channel({}, ex, "bingham_profile.csv");
   EXPECT_LT(r.l2, 0.05);
   EXPECT_NEAR(r.plug_half, r.plug_exact, 0.10 * r.plug_exact);
   EXPECT_NEAR(r.flow, r.flow_exact, 0.03 * r.flow_exact);
@@ -133,6 +145,38 @@ TEST(Bingham, WithoutTheYieldTermTheComparisonFails) {
   const Result r = run_channel({"fluid.rheology.yield=false"}, ex);
   EXPECT_GT(r.l2, 0.05);
   EXPECT_GT(std::abs(r.flow - r.flow_exact), 0.03 * r.flow_exact);
+}
+
+// Raising the Papanastasiou exponent m moves the regularised solution toward the exact plug
+// flow, and costs steps: mu_eff reaches K + m tau0 at low shear, and the explicit viscous limit
+// 0.125 h^2 rho / mu_max shrinks with it (the cap is set high enough not to bind here).
+TEST(Bingham, RaisingMMovesTowardThePlugAndCostsSteps) {
+  const Exact ex{163, 0.245, 0.1, 1, 0.005};
+  const std::vector<std::string> base = {"sph.dp=0.0005", "fluid.rheology.mu_max=1000"};
+  auto with_m = [&](const char* m) {
+    std::vector<std::string> ov = base;
+    ov.push_back(std::string("fluid.rheology.m=") + m);
+    return run_channel(ov, ex);
+  };
+  const Result m1 = with_m("1");
+  const Result m10 = with_m("10");
+  EXPECT_LT(m10.l2, m1.l2);
+  EXPECT_LT(std::abs(m10.plug_half - ex.y0()), std::abs(m1.plug_half - ex.y0()));
+  EXPECT_GT(m10.steps, 3 * m1.steps);
+}
+
+// The speed-accuracy sweep behind docs/VALIDATION.md (run by hand: it takes minutes):
+//   build/tests/validation_tests --gtest_also_run_disabled_tests --gtest_filter='*SweepM*'
+TEST(Bingham, DISABLED_SweepM) {
+  const Exact ex{163, 0.245, 0.1, 1, 0.005};
+  std::ofstream f("bingham_m_sweep.csv");
+  f << "m,l2,plug_half,plug_exact,flow_error,steps,wall_s\n";
+  for (const char* m : {"1", "3", "10", "30", "100"}) {
+    const Result r = run_channel(
+        {"sph.dp=0.0005", "fluid.rheology.mu_max=1000", std::string("fluid.rheology.m=") + m}, ex);
+    f << m << ',' << r.l2 << ',' << r.plug_half << ',' << r.plug_exact << ','
+      << (r.flow - r.flow_exact) / r.flow_exact << ',' << r.steps << ',' << r.wall << std::endl;
+  }
 }
 
 }  // namespace
