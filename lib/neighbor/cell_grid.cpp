@@ -7,11 +7,14 @@
 
 namespace sphdem {
 
-CellGrid make_cell_grid(int dim, Vec3 lo, Vec3 hi, Real min_cell, const bool periodic[3]) {
+CellGrid make_cell_grid(int dim, Vec3 lo, Vec3 hi, Real min_cell, const bool periodic[3],
+                        int reach) {
   if (dim != 2 && dim != 3) throw InputError("dimension must be 2 or 3");
   if (!(min_cell > 0)) throw InputError("cell size must be positive");
+  if (reach < 1) throw InputError("cell reach must be at least 1");
   CellGrid g;
   g.dim = dim;
+  g.reach = reach;
   g.lo = lo;
   for (int k = 0; k < 3; ++k) {
     const Real len = hi[k] - lo[k];

@@ -1,8 +1,10 @@
 // Uniform cell grid for the neighbour search (DESIGN.md §4).
 //
-// The cell edge is at least the search radius (2h, plus a skin), so all neighbours of a particle
-// lie in its own cell and the 3^d cells around it. 2D runs in the x-z plane with one cell layer
-// in y. Axes may be periodic; then the cell count along the axis divides the period exactly and
+// The cell edge is at least the search radius divided by `reach` (radius = 2h plus a skin), so
+// all neighbours of a particle lie within `reach` cells of its own along each axis. reach = 1
+// scans 3^d cells of edge 2h; reach = 2 scans 5^d cells of edge h, which holds 42% fewer
+// candidates in 3D (125 h^3 against 216 h^3). 2D runs in the x-z plane with one cell layer in y.
+// Axes may be periodic; then the cell count along the axis divides the period exactly and
 // distances use the minimum image.
 #pragma once
 
@@ -19,7 +21,8 @@ struct CellGrid {
   Vec3 cell;             // cell edge along each axis (>= search radius)
   int n[3] = {1, 1, 1};  // cells along x, y, z
   bool periodic[3] = {false, false, false};
-  Vec3 period;  // domain length along periodic axes
+  Vec3 period;    // domain length along periodic axes
+  int reach = 1;  // cells scanned on each side along each axis
 
   SPHDEM_HD std::uint64_t cell_count() const {
     return std::uint64_t(n[0]) * std::uint64_t(n[1]) * std::uint64_t(n[2]);
@@ -61,15 +64,17 @@ struct CellGrid {
   }
 };
 
-// Builds a grid covering [lo, hi] with cells of edge >= min_cell. Periodic axes must be at least
-// 3 cells long so a cell never appears twice among a particle's neighbour cells.
-CellGrid make_cell_grid(int dim, Vec3 lo, Vec3 hi, Real min_cell, const bool periodic[3]);
+// Builds a grid covering [lo, hi] with cells of edge >= min_cell, to be scanned `reach` cells
+// on each side. Periodic axes must be at least 2 reach + 1 cells long so a cell never appears
+// twice among a particle's neighbour cells.
+CellGrid make_cell_grid(int dim, Vec3 lo, Vec3 hi, Real min_cell, const bool periodic[3],
+                        int reach = 1);
 
-// A cell list over a contiguous range of particle slots that has been sorted by cell key:
-// cell c holds the slots [start[c], end[c]). Empty cells have start == end.
+// A cell list over a contiguous range of particle slots that has been sorted by cell key, as
+// offsets: cell c holds the slots [start[c], start[c + 1]) (ncell + 1 entries; empty cells have
+// equal offsets). Consecutive cells along x are therefore one contiguous range of slots.
 struct CellListView {
   const std::uint32_t* start = nullptr;
-  const std::uint32_t* end = nullptr;
 };
 
 // Calls f(j, r_ij, r2) for every particle slot j of the list within sqrt(radius2) of point xi
@@ -79,11 +84,23 @@ struct CellListView {
 template <class F>
 SPHDEM_HD inline void for_each_neighbor(const CellGrid& g, const CellListView& cl, const Vec3* pos,
                                         const Vec3& xi, Real radius2, F&& f) {
+  const int r = g.reach;
   const int cx = g.coord(xi.x, 0);
   const int cy = g.dim == 2 ? 0 : g.coord(xi.y, 1);
   const int cz = g.coord(xi.z, 2);
-  const int ry = g.dim == 2 ? 0 : 1;
-  for (int dz = -1; dz <= 1; ++dz) {
+  const int ry = g.dim == 2 ? 0 : r;
+  // The row of cells [x0, x1] along x is one contiguous slot range; a periodic row that wraps
+  // splits into two.
+  auto scan = [&](int x0, int x1, int y, int z) {
+    const std::uint32_t b = cl.start[g.key(x0, y, z)];
+    const std::uint32_t e = cl.start[g.key(x1, y, z) + 1];
+    for (std::uint32_t j = b; j < e; ++j) {
+      const Vec3 rij = g.separation(xi, pos[j]);
+      const Real r2 = norm2(rij);
+      if (r2 < radius2) f(Index(j), rij, r2);
+    }
+  };
+  for (int dz = -r; dz <= r; ++dz) {
     int z = cz + dz;
     if (g.periodic[2]) {
       z = (z + g.n[2]) % g.n[2];
@@ -97,21 +114,22 @@ SPHDEM_HD inline void for_each_neighbor(const CellGrid& g, const CellListView& c
       } else if (y < 0 || y >= g.n[1]) {
         continue;
       }
-      for (int dx = -1; dx <= 1; ++dx) {
-        int x = cx + dx;
-        if (g.periodic[0]) {
-          x = (x + g.n[0]) % g.n[0];
-        } else if (x < 0 || x >= g.n[0]) {
+      int x0 = cx - r, x1 = cx + r;
+      if (g.periodic[0]) {
+        if (x0 < 0) {
+          scan(x0 + g.n[0], g.n[0] - 1, y, z);
+          x0 = 0;
+        }
+        if (x1 >= g.n[0]) {
+          scan(x0, g.n[0] - 1, y, z);
+          scan(0, x1 - g.n[0], y, z);
           continue;
         }
-        const std::uint64_t c = g.key(x, y, z);
-        const std::uint32_t e = cl.end[c];
-        for (std::uint32_t j = cl.start[c]; j < e; ++j) {
-          const Vec3 rij = g.separation(xi, pos[j]);
-          const Real r2 = norm2(rij);
-          if (r2 < radius2) f(Index(j), rij, r2);
-        }
+      } else {
+        x0 = x0 < 0 ? 0 : x0;
+        x1 = x1 >= g.n[0] ? g.n[0] - 1 : x1;
       }
+      scan(x0, x1, y, z);
     }
   }
 }

@@ -15,12 +15,12 @@ namespace sphdem {
 
 template <class Space>
 struct CellList {
-  Index begin = 0, count = 0;               // the slots this list covers
-  Buffer<std::uint32_t, Space> start, end;  // per cell, absolute slot indices
-  Buffer<std::uint64_t, Space> keys;        // sorted cell key of each slot in the range
-  Buffer<std::uint32_t, Space> order;       // source slot (relative to begin) of each sorted slot
+  Index begin = 0, count = 0;          // the slots this list covers
+  Buffer<std::uint32_t, Space> start;  // ncell + 1 offsets: cell c is [start[c], start[c+1])
+  Buffer<std::uint64_t, Space> keys;   // sorted cell key of each slot in the range
+  Buffer<std::uint32_t, Space> order;  // source slot (relative to begin) of each sorted slot
 
-  CellListView view() const { return CellListView{start.data(), end.data()}; }
+  CellListView view() const { return CellListView{start.data()}; }
 };
 
 // Step 1: computes the sorted order of slots [begin, begin+count) into cl.order.
@@ -61,26 +61,26 @@ void permute_range(Space s, Buffer<T, Space>& field, const CellList<Space>& cl,
       s, count, SPHDEM_LAMBDA(Index i) { f[begin + i] = t[i]; });
 }
 
-// Step 3: fills start/end for every cell from the sorted keys.
+// Step 3: fills the cell offsets from the sorted keys: start[c] is the first slot whose key is
+// >= c (absolute index), and start[ncell] is the end of the range. Each entry is written once.
 template <class Space>
 void mark_cells(Space s, const CellGrid& g, CellList<Space>& cl) {
   const Index ncell = Index(g.cell_count());
-  cl.start.resize(std::size_t(ncell));
-  cl.end.resize(std::size_t(ncell));
+  cl.start.resize(std::size_t(ncell + 1));
   std::uint32_t* st = cl.start.data();
-  std::uint32_t* en = cl.end.data();
-  for_each(
-      s, ncell, SPHDEM_LAMBDA(Index c) {
-        st[c] = 0;
-        en[c] = 0;
-      });
   const std::uint64_t* keys = cl.keys.data();
   const Index begin = cl.begin, count = cl.count;
+  const std::uint32_t last = std::uint32_t(begin + count);
+  // Cells after the last key (all cells if the range is empty) end the range.
+  for_each(
+      s, ncell + 1, SPHDEM_LAMBDA(Index c) { st[c] = last; });
   for_each(
       s, count, SPHDEM_LAMBDA(Index i) {
         const std::uint64_t k = keys[i];
-        if (i == 0 || keys[i - 1] != k) st[k] = std::uint32_t(begin + i);
-        if (i == count - 1 || keys[i + 1] != k) en[k] = std::uint32_t(begin + i + 1);
+        const std::uint64_t prev = i == 0 ? std::uint64_t(0) : keys[i - 1] + 1;
+        if (i == 0 || keys[i - 1] != k) {
+          for (std::uint64_t c = prev; c <= k; ++c) st[c] = std::uint32_t(begin + i);
+        }
       });
 }
 

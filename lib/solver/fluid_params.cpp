@@ -51,7 +51,10 @@ StepParams make_step_params(const Scene& scene, Real c0) {
     lo[k] -= depth;
     hi[k] += depth;
   }
-  p.grid = make_cell_grid(scene.dim, lo, hi, Real(2) * p.h * skin, scene.periodic);
+  // Cells of edge h (half the support), scanned two on each side: fewer candidates per particle
+  // than 2h cells scanned one on each side (docs/BENCHMARKS.md).
+  constexpr int kReach = 2;
+  p.grid = make_cell_grid(scene.dim, lo, hi, Real(2) * p.h * skin / kReach, scene.periodic, kReach);
   return p;
 }
 

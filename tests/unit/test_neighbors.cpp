@@ -130,6 +130,23 @@ TEST(Neighbors, PeriodicAxes) {
   EXPECT_EQ(cell_list_pairs(g, c, radius), ref);
 }
 
+TEST(Neighbors, ReachTwoMatchesBruteForceIn2DAnd3DAndPeriodic) {
+  // Cells of half the radius scanned two on each side (what the solver uses).
+  for (int dim : {2, 3}) {
+    for (bool periodic : {false, true}) {
+      const bool per[3] = {periodic, false, periodic};
+      const Real radius = 0.1;
+      const Vec3 hi(0.7, dim == 3 ? 0.5 : 0.0, 0.6);
+      const CellGrid g = make_cell_grid(dim, Vec3(0, 0, 0), hi, radius / 2, per, 2);
+      EXPECT_EQ(g.reach, 2);
+      const Cloud c = random_cloud(dim, dim == 3 ? 1500 : 1200, Vec3(0, 0, 0), hi, 11 + dim);
+      const PairSet ref = brute_force(g, c, radius);
+      ASSERT_GT(ref.size(), 1000u);
+      EXPECT_EQ(cell_list_pairs(g, c, radius), ref) << "dim " << dim << " periodic " << periodic;
+    }
+  }
+}
+
 TEST(Neighbors, ParticlesOutsideGridClampToBoundaryCells) {
   // Points slightly outside the grid (walls lie outside the fluid domain) land in edge cells and
   // are still found: the radius is smaller than the overhang.

@@ -87,6 +87,18 @@ TEST(SphContinuity, FourtakasTermRemovesTheHydrostaticDifference) {
   }
 }
 
+TEST(SphContinuity, FourtakasSeriesMatchesPowWithinTheSupport) {
+  // Within |x| < 1e-3 the hydrostatic density uses a series instead of pow: it must agree.
+  const EosParams e = make_eos(1000, 20, 7);
+  for (Real z : {-0.002, -1e-4, 0.0, 3e-5, 0.004, 0.0058}) {
+    const Real x = 1000 * 9.81 * z / e.b;
+    ASSERT_LT(std::abs(x), 1e-3);
+    const Real exact = 1000 * (std::pow(1 + x, 1 / e.gamma) - 1);
+    const Real got = -diffusion_drho_ij(e, 1000, 1000, true, 9.81, z);
+    EXPECT_NEAR(got, exact, 1e-13 * 1000) << "z = " << z;
+  }
+}
+
 TEST(SphMomentum, PressureTermIsAntisymmetricForEqualMasses) {
   const KernelParams k = make_kernel(3, 0.02);
   const Vec3 r_ij(0.01, -0.005, 0.012);
