@@ -1,9 +1,10 @@
 # Thin wrapper over CMake/ctest. `make run` and `make test` are the README's two commands.
+# CUDA is built when nvcc is found (CUDA=ON/OFF forces it).
 BUILD ?= build
 JOBS ?= 2
 SCENE ?= inputs/dam_break_2d.yaml
 OUT ?= out/dam_break_2d
-CUDA ?= ON
+CUDA ?=
 PRECISION ?= double
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
@@ -21,7 +22,7 @@ deps:
 	  ($(SUDO) apt-get update -q && DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -q $(PACKAGES))
 
 configure: deps
-	cmake -S . -B $(BUILD) -G Ninja -DSPHDEM_ENABLE_CUDA=$(CUDA) -DSPHDEM_PRECISION=$(PRECISION)
+	cmake -S . -B $(BUILD) -G Ninja -DSPHDEM_PRECISION=$(PRECISION) $(if $(CUDA),-DSPHDEM_ENABLE_CUDA=$(CUDA))
 
 build: configure
 	cmake --build $(BUILD) -j $(JOBS)
