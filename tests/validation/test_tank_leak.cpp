@@ -22,8 +22,20 @@ TEST(TankLeak, ThreeLayerWallHoldsForTenSeconds) {
   std::ostringstream log;
   auto solver = make_solver(scene, Backend::kHost, log);
   const Index n0 = solver->host_particles().n_fluid;
+  // The weakly compressible tank keeps ringing (acoustic and sloshing modes seeded by the
+  // initial settling, lightly damped by alpha = 0.01: the gauge swings by up to +-100% at 10 s),
+  // so the gauge is averaged with a Hann window over the last second.
+  const FluidBlock& blk = scene.fluid_blocks[0];
+  const Vec3 gauge(0.5 * (blk.lo.x + blk.hi.x), 0, 0.5 * blk.hi.z);
+  double p_sum = 0, w_sum = 0;
   while (solver->time() < scene.time.end) {
+    const Real t0 = solver->time();
     const StepStats st = solver->step();
+    if (t0 > scene.time.end - 1) {
+      const double w = std::pow(std::sin(kPi * (t0 - (scene.time.end - 1))), 2) * st.dt;
+      p_sum += w * probe_pressure(solver->host_particles(), solver->params(), gauge);
+      w_sum += w;
+    }
     check_step_guards(scene, solver->params(), st, solver->time(), solver->step_count());
     if (solver->step_count() % 50 == 0)  // leak = fluid deeper than dp/2 inside the tank wall
       check_particle_guards(scene, solver->params(), solver->host_particles(), solver->time(),
@@ -45,12 +57,15 @@ TEST(TankLeak, ThreeLayerWallHoldsForTenSeconds) {
     f << x.z << ',' << ps.press[i] << ',' << rho0 * g * (H - x.z) << '\n';
   }
   EXPECT_EQ(outside, 0);
-  // The pressure gauge (kernel interpolation over fluid only) at mid-depth reads rho0 g H/2.
-  const Real p_mid = probe_pressure(ps, solver->params(), Vec3(L / 2, 0, H / 2));
+  // The pressure gauge (kernel interpolation over fluid only) at mid-depth, time-averaged, reads
+  // rho0 g H/2.
+  const double p_mid = p_sum / w_sum;
   EXPECT_NEAR(p_mid, rho0 * g * H / 2, 0.03 * rho0 * g * H / 2);
-  std::printf("tank after %.1f s, %lld steps: %lld fluid particles, %d outside the tank\n",
-              double(solver->time()), static_cast<long long>(solver->step_count()),
-              static_cast<long long>(ps.n_fluid), outside);
+  std::printf(
+      "tank after %.1f s, %lld steps: %lld fluid particles, %d outside the tank, "
+      "gauge %.1f Pa (hydrostatic %.1f)\n",
+      double(solver->time()), static_cast<long long>(solver->step_count()),
+      static_cast<long long>(ps.n_fluid), outside, p_mid, double(rho0 * g * H / 2));
 }
 
 // Open ends: fluid that leaves the domain is removed, counted, and its mass reported.
