@@ -49,6 +49,7 @@
 //     rho_max_ratio: 1.3         # (1, 10]
 //     mach_max: 0.1              # (0, 1]
 //     check_every: 1             # [1, 1e6] steps
+//     penetration_depth: 0.5     # [0, 10] dp; fluid deeper inside a solid is a fault
 //   checkpoint:                  # when to write checkpoints (0 = never by this rule)
 //     every_time: 0              # [0, 1e6] simulated s
 //     every_steps: 0             # [0, 2e9]
@@ -678,11 +679,13 @@ void Parser::parse_time(const Field& f) {
 
 void Parser::parse_guards(const Field& f) {
   GuardParams& p = scene_->guards;
-  MapReader m = map(f, {"rho_min_ratio", "rho_max_ratio", "mach_max", "check_every"});
+  MapReader m =
+      map(f, {"rho_min_ratio", "rho_max_ratio", "mach_max", "check_every", "penetration_depth"});
   p.rho_min_ratio = m.number("rho_min_ratio", open_interval(0, 1), p.rho_min_ratio);
   p.rho_max_ratio = m.number("rho_max_ratio", left_open(1, 10), p.rho_max_ratio);
   p.mach_max = m.number("mach_max", left_open(0, 1), p.mach_max);
   p.check_every = m.integer("check_every", 1, 1000000, p.check_every);
+  p.penetration_depth = m.number("penetration_depth", closed(0, 10), p.penetration_depth);
 }
 
 void Parser::parse_checkpoint(const Field& f) {

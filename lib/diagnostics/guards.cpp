@@ -74,9 +74,10 @@ void check_particle_guards(const Scene& scene, const StepParams& p, const Partic
            "Check density diffusion (fluid.diffusion), the CFL number and c0");
     }
   }
-  // Penetration: a fluid particle deeper than dp/2 inside a solid has crossed the wall (the
-  // first fluid layer sits at phi = +dp/2, the first boundary layer at -dp/2).
-  const Real tol = Real(0.5) * p.dp;
+  // Penetration: a fluid particle deeper than guards.penetration_depth (default dp/2) inside a
+  // solid has crossed the wall (the first fluid layer sits at phi = +dp/2, the first boundary
+  // layer at -dp/2).
+  const Real tol = scene.guards.penetration_depth * p.dp;
   for (Index i = 0; i < ps.n_fluid; ++i) {
     for (const Solid& s : scene.solids) {
       const Real phi = s.sdf->phi(ps.pos[i]);

@@ -75,8 +75,9 @@ struct TimeParams {
 struct GuardParams {
   Real rho_min_ratio = 0.7;  // density outside [rho_min_ratio, rho_max_ratio] * rho0 is a fault
   Real rho_max_ratio = 1.3;
-  Real mach_max = 0.1;  // v_max / c0 above this is a fault
-  int check_every = 1;  // steps between guard checks
+  Real mach_max = 0.1;           // v_max / c0 above this is a fault
+  int check_every = 1;           // steps between guard checks
+  Real penetration_depth = 0.5;  // fluid deeper than this many dp inside a solid is a fault
 };
 
 // When to write checkpoints (any that is > 0 triggers one). SIGTERM/SIGUSR1 and stability
