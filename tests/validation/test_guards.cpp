@@ -29,6 +29,7 @@ std::string thin_floor() {
 std::vector<std::string> coarse_dam_break(std::vector<std::string> extra) {
   std::vector<std::string> ov = {"sph.dp=0.0073",
                                  "time.end=0.5",
+                                 "time.cfl=0.2",  // the step counts below were set at 0.2
                                  "guards.mach_max=0.15",
                                  "guards.rho_min_ratio=0.7",
                                  "guards.rho_max_ratio=1.3",
