@@ -335,12 +335,12 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
       }
       const StepStats st = solver->step();
       ++steps;
-      particle_steps += double(solver->host_particles().n_fluid);
+      particle_steps += double(solver->fluid_count());  // no device download
       if (st.removed > 0)
         log << "t = " << solver->time() << " s: " << st.removed
             << " fluid particles left the domain\n";
       check_step_guards(scene, p, st, solver->time(), solver->step_count());
-      if (solver->host_particles().n_fluid == 0) {
+      if (solver->fluid_count() == 0) {
         log << "t = " << solver->time() << " s: all fluid has left the domain; stopping\n";
         break;
       }

@@ -48,6 +48,8 @@ class SolverBase {
   virtual const StepParams& params() const = 0;
   // A host copy of all particles (no copy on the host space).
   virtual const ParticleSet<Host>& host_particles() = 0;
+  // Owned fluid particles now (no host copy needed).
+  virtual Index fluid_count() const = 0;
   virtual Index removed_count() const = 0;
   virtual Real removed_mass() const = 0;
   virtual const PhaseTimes& phase_times() const = 0;

@@ -39,6 +39,7 @@ class Solver final : public SolverBase {
   Real time() const override { return time_; }
   std::int64_t step_count() const override { return step_; }
   const StepParams& params() const override { return p_; }
+  Index fluid_count() const override { return ps_.n_fluid; }
   Index removed_count() const override { return removed_; }
   Real removed_mass() const override { return removed_mass_; }
   const PhaseTimes& phase_times() const override { return times_; }
