@@ -57,6 +57,9 @@ int main(int argc, char** argv) {
   run->add_flag("--quiet", quiet, "no progress lines");
   std::string restart;
   run->add_option("--restart", restart, "continue from a checkpoint file, or 'latest' in --out");
+  std::string procs;
+  run->add_option("--procs", procs,
+                  "under mpirun: process grid along x, y, z such as 2x1x1 (0 = PETSc chooses)");
 
   auto* check = app.add_subcommand("check", "print counts, memory, dt and cost, then exit");
   check->add_option("scene", scene_path, "scene file (YAML)")->required();
@@ -91,6 +94,7 @@ int main(int argc, char** argv) {
         opt.max_steps = max_steps;
         opt.quiet = quiet;
         opt.restart = restart;
+        opt.procs = parse_procs(procs);
         const RunResult r = run_scene(scene, opt);
         status = r.unstable ? 3 : (r.interrupted ? 4 : 0);
       } else if (check->parsed()) {

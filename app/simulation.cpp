@@ -11,8 +11,11 @@
 #include <iostream>
 #include <sstream>
 
+#include <mpi.h>
+
 #include "core/error.hpp"
 #include "cuda/device.hpp"
+#include "decomposition/distributed.hpp"
 #include "diagnostics/guards.hpp"
 #include "diagnostics/probes.hpp"
 #include "io/checkpoint.hpp"
@@ -28,14 +31,78 @@ Backend parse_backend(const std::string& s) {
   throw InputError("--backend: '" + s + "' is not one of auto, host, device");
 }
 
+int world_size() {
+  int init = 0;
+  MPI_Initialized(&init);
+  int size = 1;
+  if (init) MPI_Comm_size(MPI_COMM_WORLD, &size);
+  return size;
+}
+
+int world_rank() {
+  int init = 0;
+  MPI_Initialized(&init);
+  int rank = 0;
+  if (init) MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  return rank;
+}
+
+std::array<int, 3> parse_procs(const std::string& s) {
+  std::array<int, 3> p{0, 0, 0};
+  if (s.empty()) return p;
+  int k = 0;
+  std::size_t at = 0;
+  while (k < 3) {
+    const std::size_t next = s.find_first_of("x,", at);
+    const std::string part = s.substr(at, next == std::string::npos ? next : next - at);
+    try {
+      std::size_t used = 0;
+      p[std::size_t(k)] = std::stoi(part, &used);
+      if (used != part.size() || p[std::size_t(k)] < 0) throw std::invalid_argument(part);
+    } catch (const std::exception&) {
+      throw InputError("--procs: '" + s + "' is not three counts such as 2x1x1 (0 = any)");
+    }
+    ++k;
+    if (next == std::string::npos) break;
+    at = next + 1;
+  }
+  if (k != 3) throw InputError("--procs: '" + s + "' is not three counts such as 2x1x1 (0 = any)");
+  return p;
+}
+
 std::unique_ptr<SolverBase> make_solver(const Scene& scene, Backend backend, std::ostream& log,
-                                        BuildReport* report) {
+                                        BuildReport* report, std::shared_ptr<MpiExchange>* exchange,
+                                        std::array<int, 3> procs) {
   BuildReport rep;
   ParticleSet<Host> ps = build_particles(scene, &rep);
   if (report) *report = rep;
   const Real c0 = resolve_sound_speed(scene, rep);
   if (rep.fluid == 0)
     throw InputError(scene.source + ": fluid_blocks: the scene holds no fluid particles");
+  const int nranks = world_size();
+  if (nranks > 1) {
+    const StepParams p = make_step_params(scene, c0);
+    for (int k = 0; k < 3; ++k)
+      if (p.grid.periodic[k])
+        throw InputError(scene.source +
+                         ": domain.periodic: a periodic axis runs on one rank only "
+                         "for now (this run has " +
+                         std::to_string(nranks) + " ranks)");
+    if (backend == Backend::kDevice)
+      throw InputError("--backend device: a run on " + std::to_string(nranks) +
+                       " ranks uses the host backend for now (the halo is exchanged from host "
+                       "memory)");
+    auto ex = std::make_shared<MpiExchange>(MPI_COMM_WORLD, p.grid, procs, Real(2.02) * p.h,
+                                            scene.parallel.imbalance);
+    keep_owned_fluid(*ex, ps);
+    ex->rebalance(ps);  // boxes from the initial histogram (DMSwarm moves the fluid)
+    const auto pr = ex->decomposition().procs();
+    log << "backend: host, " << host_thread_count() << " OpenMP threads per rank, " << nranks
+        << " ranks as " << pr[0] << " x " << pr[1] << " x " << pr[2]
+        << " boxes, owned-fluid imbalance (max/mean) " << ex->last_imbalance() << "\n";
+    if (exchange) *exchange = ex;
+    return make_host_solver(scene, std::move(ps), c0, ex);
+  }
   bool device = false;
   if (backend != Backend::kHost) {
     std::string why;
@@ -73,8 +140,12 @@ void write_state_csv(const ParticleSet<Host>& ps, const std::string& path) {
 class DiagnosticWriter {
  public:
   // append: a restart continues the series already in `dir`.
-  DiagnosticWriter(const Scene& s, const std::string& dir, bool append) : scene_(s) {
+  // enabled = false (ranks other than 0): no files; write() must not be called.
+  DiagnosticWriter(const Scene& s, const std::string& dir, bool append, bool enabled = true)
+      : scene_(s) {
     const Diagnostics& d = s.diagnostics;
+    for (std::size_t i = 0; i < d.profiles.size(); ++i) profile_next_.push_back(0);
+    if (!enabled) return;
     using Cols = std::vector<std::string>;
     auto path = [&](const std::string& name) { return dir + "/" + name + ".csv"; };
     for (const auto& g : d.pressure_gauges)
@@ -86,7 +157,6 @@ class DiagnosticWriter {
       force_.emplace_back(path(g.name), Cols{"t", "fx", "fy", "fz"}, append);
     for (const auto& g : d.profiles) {
       profile_.emplace_back(path(g.name), Cols{"t", "s", "x", "y", "z_surface"}, append);
-      profile_next_.push_back(0);
     }
     if (d.energy) energy_.open(path("energy"), {"t", "kinetic", "potential", "total"}, append);
   }
@@ -144,8 +214,11 @@ class DiagnosticWriter {
 // Both to the terminal and to run.log.
 class Log {
  public:
-  Log(const std::string& path, bool quiet, bool append)
-      : file_(path, append ? std::ios::app : std::ios::trunc), quiet_(quiet) {
+  // Only rank 0 logs (enabled = false: a sink).
+  Log(const std::string& path, bool quiet, bool append, bool enabled = true)
+      : quiet_(quiet || !enabled) {
+    if (!enabled) return;
+    file_.open(path, append ? std::ios::app : std::ios::trunc);
     if (!file_) throw InputError("cannot write run log '" + path + "'");
   }
   template <class T>
@@ -245,9 +318,11 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
       throw InputError("--restart latest: no checkpoint_*.h5 in '" + opt.out_dir + "'");
   }
   const bool restarting = !restart_file.empty();
+  const int rank = world_rank();
+  const bool root = rank == 0;
 
-  Log log(opt.out_dir + "/run.log", opt.quiet, restarting);
-  {
+  Log log(opt.out_dir + "/run.log", opt.quiet, restarting, root);
+  if (root) {
     std::ofstream y(opt.out_dir + "/scene.yaml");
     y << scene.yaml_text;
   }
@@ -255,7 +330,16 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
       << "' from " << scene.source << "\n";
   std::ostringstream slog;
   BuildReport rep;
-  auto solver = make_solver(scene, opt.backend, slog, &rep);
+  std::shared_ptr<MpiExchange> ex;
+  auto solver = make_solver(scene, opt.backend, slog, &rep, &ex, opt.procs);
+  MPI_Comm comm = ex ? ex->comm() : MPI_COMM_SELF;
+  // What this rank writes (checkpoints, frames), and what rank 0 evaluates diagnostics on.
+  auto share = [&]() {
+    return ex ? output_share(solver->host_particles(), rank) : solver->host_particles();
+  };
+  auto gathered = [&]() {
+    return ex ? gather_on_root(comm, solver->host_particles()) : solver->host_particles();
+  };
   log << slog.str();
   const StepParams& p = solver->params();
   log << "particles: " << rep.fluid << " fluid, " << rep.wall << " wall boundary, " << rep.grain
@@ -267,6 +351,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
   if (restarting) {
     CheckpointData cp = read_checkpoint(restart_file);
     check_checkpoint_matches(cp, scene, rep.wall + rep.grain, restart_file);
+    if (ex) distribute_after_read(*ex, cp.particles);
     next_diag = cp.next_output_time;
     profile_state = cp.profile_next;
     solver->restore(std::move(cp.particles), cp.counters);
@@ -279,8 +364,16 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
   r.wall = rep.wall;
   r.grain = rep.grain;
   r.space = solver->space_name();
-  DiagnosticWriter diag(scene, opt.out_dir, restarting);
+  DiagnosticWriter diag(scene, opt.out_dir, restarting, root);
   diag.set_profile_state(profile_state);
+  auto write_diagnostics = [&]() {
+    if (!ex) {
+      diag.write(solver->time(), solver->host_particles(), p);
+      return;
+    }
+    const ParticleSet<Host> all = gathered();
+    if (root) diag.write(solver->time(), all, p);
+  };
   std::unique_ptr<FrameWriter> frames;
   Real next_frame = 0;
   if (scene.frames.every > 0) {
@@ -293,10 +386,13 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
 
   auto save = [&](const std::string& path) {
     CheckpointData cp;
-    cp.particles = solver->host_particles();  // a copy: the solver keeps its state
+    cp.particles = share();  // a copy: the solver keeps its state
     cp.counters = solver->counters();
     cp.next_output_time = next_diag;
     cp.profile_next = diag.profile_state();
+    if (ex) {  // rank 0 evaluates the profiles; the file's attributes must agree on all ranks
+      MPI_Bcast(cp.profile_next.data(), int(cp.profile_next.size()), MPI_INT64_T, 0, comm);
+    }
     cp.scene_yaml = scene.yaml_text;
     cp.dim = scene.dim;
     cp.dp = scene.sph.dp;
@@ -326,11 +422,11 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
     while (solver->time() < end - Real(1e-12) * end &&
            (opt.max_steps < 0 || steps < opt.max_steps)) {
       if (solver->time() >= next_diag - Real(1e-12)) {
-        diag.write(solver->time(), solver->host_particles(), p);
+        write_diagnostics();
         next_diag += scene.diagnostics.every;
       }
       if (frames && solver->time() >= next_frame - Real(1e-12)) {
-        frames->write(solver->time(), solver->host_particles());
+        frames->write(solver->time(), share());
         next_frame += scene.frames.every;
       }
       const StepStats st = solver->step();
@@ -344,18 +440,47 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
         log << "t = " << solver->time() << " s: all fluid has left the domain; stopping\n";
         break;
       }
-      if (scene.guards.check_every > 0 && steps % scene.guards.check_every == 0)
-        check_particle_guards(scene, p, solver->host_particles(), solver->time(),
-                              solver->step_count());
+      if (scene.guards.check_every > 0 && steps % scene.guards.check_every == 0) {
+        if (!ex) {
+          check_particle_guards(scene, p, solver->host_particles(), solver->time(),
+                                solver->step_count());
+        } else {
+          // Collective: every rank stops if any rank's particles fail.
+          std::string why;
+          try {
+            check_particle_guards(scene, p, solver->host_particles(), solver->time(),
+                                  solver->step_count());
+          } catch (const StabilityError& e) {
+            why = e.what();
+          }
+          int bad = why.empty() ? 0 : 1, any = 0, first = 0;
+          MPI_Allreduce(&bad, &any, 1, MPI_INT, MPI_MAX, comm);
+          if (any) {
+            const int me = bad ? rank : 1 << 30;
+            MPI_Allreduce(&me, &first, 1, MPI_INT, MPI_MIN, comm);
+            int len = int(why.size());
+            MPI_Bcast(&len, 1, MPI_INT, first, comm);
+            why.resize(std::size_t(len));
+            MPI_Bcast(why.data(), len, MPI_CHAR, first, comm);
+            throw StabilityError(why + " (rank " + std::to_string(first) + ")");
+          }
+        }
+      }
       const auto now = clock::now();
       // Checkpoints: by steps, simulated time, wall time, or on a signal.
-      const int sig = g_signal;
+      int sig = g_signal;
       const bool by_steps = ck.every_steps > 0 && solver->step_count() % ck.every_steps == 0;
       const bool by_time =
           ck.every_time > 0 && solver->time() >= next_checkpoint_time - Real(1e-12);
-      const bool by_wall =
+      bool by_wall =
           ck.every_wall > 0 &&
           std::chrono::duration<double>(now - last_checkpoint_wall).count() >= ck.every_wall;
+      if (ex) {  // a signal or the wall clock on any rank checkpoints on all of them
+        int f[2] = {sig, by_wall ? 1 : 0};
+        MPI_Allreduce(MPI_IN_PLACE, f, 2, MPI_INT, MPI_MAX, comm);
+        sig = f[0];
+        by_wall = f[1] != 0;
+      }
       if (by_steps || by_time || by_wall || sig != 0) {
         if (sig != 0) log << "signal " << (sig == SIGTERM ? "SIGTERM" : "SIGUSR1") << " received\n";
         save(checkpoint_path(opt.out_dir, solver->step_count()));
@@ -390,8 +515,8 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
       }
     }
     if (!r.interrupted) {
-      diag.write(solver->time(), solver->host_particles(), p);
-      if (frames) frames->write(solver->time(), solver->host_particles());
+      write_diagnostics();
+      if (frames) frames->write(solver->time(), share());
     }
   } catch (const StabilityError& e) {
     r.unstable = true;
@@ -399,9 +524,11 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
     if (tty) std::cout << "\n";
     log << "ERROR: " << e.what() << "\n";
     const std::string dump = opt.out_dir + "/emergency_step" + std::to_string(solver->step_count());
-    write_state_csv(solver->host_particles(), dump + ".csv");
+    const std::string csv = dump + (ex ? "_rank" + std::to_string(rank) : std::string()) + ".csv";
+    write_state_csv(solver->host_particles(), csv);
     save(dump + ".h5");
-    log << "emergency state written to " << dump << ".csv and " << dump << ".h5\n";
+    log << "emergency state written to " << (ex ? dump + "_rank*.csv" : csv) << " and " << dump
+        << ".h5\n";
   }
   if (tty && !r.unstable) std::cout << "\n";
   r.steps = steps;
@@ -410,11 +537,14 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
   r.removed = solver->removed_count();
   r.removed_mass = solver->removed_mass();
   r.particle_steps_per_second = r.wall_seconds > 0 ? particle_steps / r.wall_seconds : 0;
+  if (ex)
+    log << "ranks: " << ex->size() << ", rebalanced " << ex->rebalance_count()
+        << " times, owned-fluid imbalance at the last check " << ex->last_imbalance() << "\n";
   if (r.removed > 0)
     log << "removed (open ends): " << r.removed << " particles, " << r.removed_mass << " kg\n";
   log << "done: " << r.steps << " steps, t = " << r.sim_time << " s, " << r.wall_seconds
       << " s wall, " << r.particle_steps_per_second << " particle-steps/s\n";
-  write_summary(opt.out_dir + "/summary.json", scene, r);
+  if (root) write_summary(opt.out_dir + "/summary.json", scene, r);
   log.flush();
   return r;
 }

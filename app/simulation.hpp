@@ -2,6 +2,7 @@
 // writes diagnostics (CSV), the run log and summary.json, and stops cleanly on a guard.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <ostream>
@@ -19,11 +20,12 @@ Backend parse_backend(const std::string& s);
 struct RunOptions {
   std::string out_dir = "out";
   Backend backend = Backend::kAuto;
-  std::int64_t max_steps = -1;    // stop after this many steps (bench, tests); -1 = to time.end
-  bool quiet = false;             // no progress lines
-  double progress_every_s = 2.0;  // wall seconds between progress lines when not on a TTY
-  std::string restart;            // checkpoint file, "latest" (newest in out_dir), or "" (none)
-  bool handle_signals = true;     // SIGTERM/SIGUSR1 write a checkpoint (SIGTERM then stops)
+  std::int64_t max_steps = -1;        // stop after this many steps (bench, tests); -1 = to time.end
+  bool quiet = false;                 // no progress lines
+  double progress_every_s = 2.0;      // wall seconds between progress lines when not on a TTY
+  std::string restart;                // checkpoint file, "latest" (newest in out_dir), or "" (none)
+  bool handle_signals = true;         // SIGTERM/SIGUSR1 write a checkpoint (SIGTERM then stops)
+  std::array<int, 3> procs{0, 0, 0};  // process grid on many ranks (0: PETSc chooses)
 };
 
 struct RunResult {
@@ -42,10 +44,21 @@ struct RunResult {
   std::string space;    // host or device
 };
 
+class MpiExchange;
+
 // Creates the solver for the backend (auto: the device if a GPU is seen, else the host, and
-// says so in `log`).
+// says so in `log`). Under mpirun with more than one rank, the domain is decomposed (procs: the
+// process grid, 0 = PETSc chooses), this rank keeps the fluid it owns, and `exchange` receives the
+// decomposition.
 std::unique_ptr<SolverBase> make_solver(const Scene& scene, Backend backend, std::ostream& log,
-                                        BuildReport* report = nullptr);
+                                        BuildReport* report = nullptr,
+                                        std::shared_ptr<MpiExchange>* exchange = nullptr,
+                                        std::array<int, 3> procs = {0, 0, 0});
+
+// "2x1x1" or "2,1,1" -> {2, 1, 1}; "" -> {0, 0, 0}. Throws InputError naming --procs.
+std::array<int, 3> parse_procs(const std::string& s);
+int world_rank();
+int world_size();
 
 // Runs the scene. Throws InputError for bad input; a stability guard does not throw: it is
 // reported in RunResult (and the log), with an emergency state file written.

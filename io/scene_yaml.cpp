@@ -55,6 +55,9 @@
 //     every_steps: 0             # [0, 2e9]
 //     every_wall: 0              # [0, 1e7] wall-clock s
 //     keep: 3                    # [1, 1000] newest kept
+//   parallel:                    # runs on many ranks (mpirun)
+//     rebalance_every: 100       # [0, 1e9] steps between imbalance checks (0 = only at the start)
+//     imbalance: 1.2             # [1, 100] max/mean owned fluid per rank that triggers a rebalance
 //   frames:                      # ParaView frames (HDF5 + one XDMF index)
 //     every: 0                   # [0, 1e6] simulated s; 0 = none
 //     fields: [vel, rho, press]  # from: vel, rho, press, acc, drho, mass, id
@@ -494,6 +497,7 @@ class Parser {
   void parse_time(const Field& f);
   void parse_guards(const Field& f);
   void parse_checkpoint(const Field& f);
+  void parse_parallel(const Field& f);
   void parse_frames(const Field& f);
   void parse_solids(const Field& f);
   void parse_fluid_blocks(const Field& f);
@@ -570,9 +574,10 @@ Scene Parser::parse(const YAML::Node& root) {
   Scene s;
   s.source = file_;  // also the base folder of mesh paths
   scene_ = &s;
-  MapReader top = map(Field{root, root.Mark(), ""},
-                      {"name", "dimension", "domain", "gravity", "fluid", "sph", "time", "guards",
-                       "checkpoint", "frames", "solids", "fluid_blocks", "diagnostics"});
+  MapReader top =
+      map(Field{root, root.Mark(), ""},
+          {"name", "dimension", "domain", "gravity", "fluid", "sph", "time", "guards", "checkpoint",
+           "parallel", "frames", "solids", "fluid_blocks", "diagnostics"});
   s.name = name(top.require("name"));
   s.dim = dim_ = integer(top.require("dimension"), 2, 3);
   parse_domain(top.require("domain"));
@@ -585,6 +590,7 @@ Scene Parser::parse(const YAML::Node& root) {
   parse_time(top.require("time"));
   if (auto f = top.find("guards")) parse_guards(*f);
   if (auto f = top.find("checkpoint")) parse_checkpoint(*f);
+  if (auto f = top.find("parallel")) parse_parallel(*f);
   if (auto f = top.find("frames")) parse_frames(*f);
   if (auto f = top.find("solids")) parse_solids(*f);
   if (auto f = top.find("fluid_blocks")) parse_fluid_blocks(*f);
@@ -695,6 +701,13 @@ void Parser::parse_checkpoint(const Field& f) {
   p.every_steps = m.integer("every_steps", 0, 2000000000, int(p.every_steps));
   p.every_wall = m.number("every_wall", closed(0, 1e7), p.every_wall);
   p.keep = int(m.integer("keep", 1, 1000, p.keep));
+}
+
+void Parser::parse_parallel(const Field& f) {
+  ParallelParams& p = scene_->parallel;
+  MapReader m = map(f, {"rebalance_every", "imbalance"});
+  p.rebalance_every = m.integer("rebalance_every", 0, 1000000000, p.rebalance_every);
+  p.imbalance = m.number("imbalance", closed(1, 100), p.imbalance);
 }
 
 void Parser::parse_frames(const Field& f) {

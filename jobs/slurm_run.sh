@@ -1,17 +1,21 @@
 #!/usr/bin/env bash
-# Slurm job: runs one sphdem scene, and continues from the newest checkpoint when resubmitted.
-#   sbatch jobs/slurm_run.sh inputs/dam_break_3d.yaml out/dam_break_3d
-# Resources: one task with one GPU (sphdem uses the GPU it sees, or the CPU cores when there is
-# none). sphdem is single-rank for now: the MPI decomposition module exists but is not yet wired
-# into the time loop, so do not raise --ntasks.
+# Slurm job: runs one sphdem scene on N ranks, and continues from the newest checkpoint when
+# requeued or resubmitted (on any rank count: the checkpoint is redistributed).
+#   sbatch --ntasks=4 jobs/slurm_run.sh inputs/dam_break_3d.yaml out/dam_break_3d
+#   sbatch --ntasks=1 --gpus-per-task=1 jobs/slurm_run.sh inputs/dam_break_3d.yaml out/db3d_gpu
+# Resources: --ntasks ranks, each with --cpus-per-task OpenMP threads. The domain is split into
+# one box per rank (PETSc DMDA; --procs below fixes the process grid, default: PETSc chooses).
+# A single-rank job uses the GPU it is given (one GPU per task); multi-rank runs use the CPU
+# backend on every rank for now (the halo is exchanged from host memory; GPU ranks are future
+# work), so drop --gpus-per-task for them.
 # Outputs: OUT/run.log, OUT/summary.json, OUT/*.csv, OUT/checkpoint_*.h5, OUT/frames.xdmf.
 # Time limit: Slurm sends SIGTERM --signal seconds before the end (below: 300 s); sphdem writes a
-# checkpoint and exits with status 4, and the script requeues itself, so the next start continues
-# with --restart latest. Exit status 3 means a stability guard fired (see OUT/run.log).
+# checkpoint on every rank and exits with status 4, and the script requeues itself, so the next
+# start continues with --restart latest. Exit status 3 means a stability guard fired (see
+# OUT/run.log; an emergency checkpoint is in OUT).
 #SBATCH --job-name=sphdem
-#SBATCH --ntasks=1
+#SBATCH --ntasks=4
 #SBATCH --cpus-per-task=8
-#SBATCH --gpus-per-task=1
 #SBATCH --time=04:00:00
 #SBATCH --signal=TERM@300
 #SBATCH --requeue
@@ -19,11 +23,14 @@
 set -uo pipefail
 scene=${1:?scene file}
 out=${2:?output folder}
+shift 2
 sphdem=${SPHDEM:-build/sphdem}
 export OMP_NUM_THREADS=${SLURM_CPUS_PER_TASK:-1}
 restart=()
 if ls "$out"/checkpoint_*.h5 >/dev/null 2>&1; then restart=(--restart latest); fi
-srun --ntasks=1 "$sphdem" run "$scene" --out "$out" "${restart[@]}" &
+# srun starts --ntasks ranks; with Open MPI without Slurm PMI support use
+#   mpirun -n "$SLURM_NTASKS" "$sphdem" ...
+srun "$sphdem" run "$scene" --out "$out" "${restart[@]}" "$@" &
 pid=$!
 trap 'kill -TERM $pid' TERM
 wait $pid; status=$?

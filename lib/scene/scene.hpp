@@ -89,6 +89,12 @@ struct CheckpointParams {
   int keep = 3;                  // newest checkpoints kept
 };
 
+// Runs on many ranks (mpirun): when to rebalance the boxes from the particle histogram.
+struct ParallelParams {
+  int rebalance_every = 100;  // steps between imbalance checks; 0 = never after the start
+  Real imbalance = 1.2;       // rebalance when max/mean owned fluid per rank exceeds this
+};
+
 // ParaView frames: parallel HDF5 files indexed by one XDMF file.
 struct FrameParams {
   Real every = 0;  // simulated seconds between frames; 0 = no frames
@@ -158,6 +164,7 @@ struct Scene {
   std::vector<FluidBlock> fluid_blocks;
   Diagnostics diagnostics;
   CheckpointParams checkpoint;
+  ParallelParams parallel;
   FrameParams frames;
   std::string yaml_text;  // the resolved scene as YAML, stored in outputs and checkpoints
 

@@ -15,11 +15,22 @@
 
 namespace sphdem {
 
-// The cell lists a driver needs: fluid (owned + halo) and boundary (walls + grains).
+// The cell lists a driver needs: owned fluid, halo fluid (copies of other ranks' particles; empty
+// on one rank) and boundary (walls + grains).
 struct NeighborLists {
   CellListView fluid;
   CellListView boundary;
+  CellListView halo;
+  bool has_halo = false;
 };
+
+// Calls f(j, r_ij, r2) for every fluid neighbour of x, owned then halo.
+template <class F>
+SPHDEM_HD inline void for_each_fluid_neighbor(const StepParams& p, const NeighborLists& nl,
+                                              const Vec3* pos, const Vec3& x, F&& f) {
+  for_each_neighbor(p.grid, nl.fluid, pos, x, p.radius2, f);
+  if (nl.has_halo) for_each_neighbor(p.grid, nl.halo, pos, x, p.radius2, f);
+}
 
 // p = Tait(rho) for slots [begin, end).
 template <class Space>
@@ -33,20 +44,28 @@ void compute_pressure(Space s, ParticleView v, Index begin, Index end, EosParams
 
 // mDBC: boundary density from the ghost-node interpolation over fluid, and the boundary velocity
 // for the viscous term. Boundary slots [begin, end); v.vel holds the solid's own velocity.
+// With `mine` (one flag per slot of the range), slots whose flag is 0 are zeroed instead: another
+// rank owns their ghost node, and the ranks' results are summed.
 template <class Space>
-void update_mdbc(Space s, ParticleView v, NeighborLists nl, StepParams p, Index begin, Index end) {
+void update_mdbc(Space s, ParticleView v, NeighborLists nl, StepParams p, Index begin, Index end,
+                 const std::uint8_t* mine = nullptr) {
   for_each(
       s, end - begin, SPHDEM_LAMBDA(Index k) {
         const Index b = begin + k;
+        if (mine && !mine[k]) {
+          v.rho[b] = 0;
+          v.press[b] = 0;
+          v.vel_bc[b] = Vec3();
+          return;
+        }
         const Vec3 rg = v.ghost[b];
         MdbcSums sums;
-        for_each_neighbor(p.grid, nl.fluid, v.pos, rg, p.radius2,
-                          [&](Index j, const Vec3& r_gj, Real r2) {
-                            const Real r = std::sqrt(r2);
-                            const Vec3 d = -r_gj;  // r_j - r_G
-                            mdbc_accumulate(sums, v.mass[j] / v.rho[j], v.rho[j], v.vel[j], d,
-                                            kernel_w(p.kernel, r), kernel_f(p.kernel, r));
-                          });
+        for_each_fluid_neighbor(p, nl, v.pos, rg, [&](Index j, const Vec3& r_gj, Real r2) {
+          const Real r = std::sqrt(r2);
+          const Vec3 d = -r_gj;  // r_j - r_G
+          mdbc_accumulate(sums, v.mass[j] / v.rho[j], v.rho[j], v.vel[j], d, kernel_w(p.kernel, r),
+                          kernel_f(p.kernel, r));
+        });
         const Vec3 rb_minus_rg = p.grid.separation(v.pos[b], rg);
         Real rho_b = mdbc_boundary_density(sums, p.dim, rb_minus_rg, p.eos.rho0, p.mdbc_det_min);
         // Walls push, never pull: a boundary below rho0 would attract the free surface.
@@ -71,8 +90,8 @@ void compute_viscous_state(Space s, ParticleView v, NeighborLists nl, StepParams
           const Vec3 vj = fluid || !p.mdbc ? v.vel[j] : v.vel_bc[j];
           velocity_gradient_add(G, v.mass[j] / v.rho[j], vj - vi, r_ij, f);
         };
-        for_each_neighbor(p.grid, nl.fluid, v.pos, ri, p.radius2,
-                          [&](Index j, const Vec3& r_ij, Real r2) { add(j, r_ij, r2, true); });
+        for_each_fluid_neighbor(
+            p, nl, v.pos, ri, [&](Index j, const Vec3& r_ij, Real r2) { add(j, r_ij, r2, true); });
         for_each_neighbor(p.grid, nl.boundary, v.pos, ri, p.radius2,
                           [&](Index j, const Vec3& r_ij, Real r2) { add(j, r_ij, r2, false); });
         const SymTensor eps = strain_rate(G);
@@ -146,7 +165,8 @@ SPHDEM_HD inline void accumulate_pair(const StepParams& p, const ParticleView& v
 
 // Rates of change for slots [begin, end): acceleration (with gravity for fluid), drho/dt, and
 // the per-particle viscous dt rate into `rate`. Fluid slots see fluid and boundary neighbours;
-// boundary slots see fluid only (their acc, times their mass, is the fluid force on the solid).
+// boundary slots see owned fluid only (their acc, times their mass, is the fluid force on the
+// solid; on many ranks each rank holds its share, and the shares add up).
 template <class Space>
 void compute_rates(Space s, ParticleView v, NeighborLists nl, StepParams p, Index begin, Index end,
                    bool fluid_range, Real* rate) {
@@ -160,6 +180,11 @@ void compute_rates(Space s, ParticleView v, NeighborLists nl, StepParams p, Inde
                             accumulate_pair(p, v, i, j, r_ij, r2, fluid_range, true, sums);
                           });
         if (fluid_range) {
+          if (nl.has_halo)
+            for_each_neighbor(p.grid, nl.halo, v.pos, ri, p.radius2,
+                              [&](Index j, const Vec3& r_ij, Real r2) {
+                                accumulate_pair(p, v, i, j, r_ij, r2, true, true, sums);
+                              });
           for_each_neighbor(p.grid, nl.boundary, v.pos, ri, p.radius2,
                             [&](Index j, const Vec3& r_ij, Real r2) {
                               accumulate_pair(p, v, i, j, r_ij, r2, true, false, sums);

@@ -10,6 +10,7 @@
 
 #include "core/exec.hpp"
 #include "scene/scene.hpp"
+#include "solver/exchange.hpp"
 #include "solver/fluid_params.hpp"
 #include "solver/particles.hpp"
 
@@ -25,7 +26,7 @@ struct StepStats {
 
 // Wall time spent per phase, seconds (summed over steps).
 struct PhaseTimes {
-  double cell_list = 0, mdbc = 0, forces = 0, integrate = 0, other = 0;
+  double cell_list = 0, halo = 0, mdbc = 0, forces = 0, integrate = 0, other = 0;
 };
 
 // Everything beyond the particle fields that a bit-identical restart needs.
@@ -61,9 +62,10 @@ class SolverBase {
 };
 
 // Builds a solver on the host (OpenMP) or the device (CUDA). `particles` come from
-// build_particles(); c0 is the resolved speed of sound.
+// build_particles(); c0 is the resolved speed of sound. On many ranks, `ex` is the decomposition
+// and `particles` this rank's owned fluid plus every wall particle.
 std::unique_ptr<SolverBase> make_host_solver(const Scene& scene, ParticleSet<Host> particles,
-                                             Real c0);
+                                             Real c0, std::shared_ptr<Exchange> ex = nullptr);
 std::unique_ptr<SolverBase> make_device_solver(const Scene& scene, ParticleSet<Host> particles,
                                                Real c0);
 

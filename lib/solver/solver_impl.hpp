@@ -5,10 +5,13 @@
 
 #include <chrono>
 #include <cmath>
+#include <limits>
+#include <memory>
 #include <sstream>
 
 #include "core/error.hpp"
 #include "neighbor/cell_list.hpp"
+#include "solver/exchange.hpp"
 #include "solver/fluid_drivers.hpp"
 #include "solver/solver.hpp"
 
@@ -24,14 +27,16 @@ inline void to_host(Host, ParticleSet<Host>&, ParticleSet<Host>&) {}
 template <class Space>
 class Solver final : public SolverBase {
  public:
-  Solver(const Scene& scene, ParticleSet<Host> particles, Real c0)
-      : scene_(scene), p_(make_step_params(scene, c0)) {
-    to_space(Space{}, std::move(particles), ps_);
-    max_id_ = 0;
-    host_valid_ = false;
-    max_id_ = GlobalId(ps_.size());
-    rate_.resize(std::size_t(ps_.size()));
-    sort_boundary();
+  // `ex`: the decomposition on many ranks (particles: this rank's owned fluid and every wall
+  // particle); null on one rank.
+  Solver(const Scene& scene, ParticleSet<Host> particles, Real c0,
+         std::shared_ptr<Exchange> ex = nullptr)
+      : scene_(scene), p_(make_step_params(scene, c0)), ex_(std::move(ex)) {
+    if (ex_ && !std::is_same_v<Space, Host>)
+      throw InputError("a run on " + std::to_string(ex_->size()) +
+                       " ranks uses the host backend (the halo is exchanged from host memory); "
+                       "pass --backend host");
+    adopt(std::move(particles));
     verlet_count_ = 0;
   }
 
@@ -39,7 +44,7 @@ class Solver final : public SolverBase {
   Real time() const override { return time_; }
   std::int64_t step_count() const override { return step_; }
   const StepParams& params() const override { return p_; }
-  Index fluid_count() const override { return ps_.n_fluid; }
+  Index fluid_count() const override { return global_fluid_; }
   Index removed_count() const override { return removed_; }
   Real removed_mass() const override { return removed_mass_; }
   const PhaseTimes& phase_times() const override { return times_; }
@@ -61,10 +66,20 @@ class Solver final : public SolverBase {
     host_valid_ = false;
     StepStats st;
     auto t0 = clock::now();
+    drop_halo();
     st.removed = remove_and_wrap();
+    if constexpr (std::is_same_v<Space, Host>) {
+      if (ex_) {
+        ex_->migrate(ps_);
+        const int every = scene_.parallel.rebalance_every;
+        if (every > 0 && step_ > 0 && step_ % every == 0 && ex_->rebalance(ps_)) mark_wall_owners();
+      }
+    }
     sort_fluid();
     auto t1 = clock::now();
     times_.cell_list += std::chrono::duration<double>(t1 - t0).count();
+    fill_halo();
+    times_.halo += std::chrono::duration<double>(clock::now() - t1).count();
 
     const bool symplectic = scene_.time.integrator == Integrator::kSymplectic;
     evaluate_rates();
@@ -75,6 +90,9 @@ class Solver final : public SolverBase {
     const Index nf = ps_.n_fluid;
     if (symplectic) {
       symplectic_predict(Space{}, v, 0, nf, dt);
+      refresh_halo(ps_.pos, true);
+      refresh_halo(ps_.vel);
+      refresh_halo(ps_.rho);
       evaluate_rates();
       symplectic_correct(Space{}, v, 0, nf, dt);
     } else {
@@ -84,6 +102,7 @@ class Solver final : public SolverBase {
       integrate_verlet(Space{}, v, 0, nf, dt, euler);
     }
     if (!p_.mdbc) {
+      if (ex_) sum_walls(ps_.drho);
       integrate_dbc_density(Space{}, v, ps_.wall_begin(), ps_.size(), dt, p_.eos);
     }
     times_.integrate += std::chrono::duration<double>(clock::now() - t2).count();
@@ -112,30 +131,38 @@ class Solver final : public SolverBase {
   }
 
   void restore(ParticleSet<Host> particles, const SolverCounters& c) override {
-    host_valid_ = false;
-    to_space(Space{}, std::move(particles), ps_);
-    GlobalId max_id = 0;
-    const auto& h = host_particles();
-    for (Index i = 0; i < h.size(); ++i) max_id = std::max(max_id, h.id[i]);
-    max_id_ = std::max(max_id_, max_id + 1);
-    rate_.resize(std::size_t(ps_.size()));
+    adopt(std::move(particles));
     time_ = c.time;
     step_ = c.step;
     verlet_count_ = c.verlet_count;
     removed_ = c.removed;
     removed_mass_ = c.removed_mass;
+  }
+
+  // Takes a new particle set (construction and restart): ids, scratch sizes, the wall list.
+  void adopt(ParticleSet<Host> particles) {
+    host_valid_ = false;
+    GlobalId max_id = 0;
+    for (Index i = 0; i < particles.size(); ++i) max_id = std::max(max_id, particles.id[i]);
+    Real m = Real(max_id) + 1;
+    if (ex_) ex_->max(&m, 1);
+    max_id_ = GlobalId(m);
+    global_fluid_ = ex_ ? Index(ex_->sum(std::int64_t(particles.n_fluid))) : particles.n_fluid;
+    to_space(Space{}, std::move(particles), ps_);
+    rate_.resize(std::size_t(ps_.size()));
     sort_boundary();
+    if (ex_) mark_wall_owners();
   }
 
   double last_pair_count() override {
     ParticleView v = view();
-    const NeighborLists nl{fluid_cells_.view(), boundary_cells_.view()};
+    const NeighborLists nl = lists();
     const StepParams p = p_;
     return reduce<SumOp, double>(
         Space{}, ps_.n_fluid, SPHDEM_LAMBDA(Index i) {
           double c = 0;
           auto count = [&](Index, const Vec3&, Real r2) { c += r2 > 0 ? 1 : 0; };
-          for_each_neighbor(p.grid, nl.fluid, v.pos, v.pos[i], p.radius2, count);
+          for_each_fluid_neighbor(p, nl, v.pos, v.pos[i], count);
           for_each_neighbor(p.grid, nl.boundary, v.pos, v.pos[i], p.radius2, count);
           return c;
         });
@@ -146,11 +173,26 @@ class Solver final : public SolverBase {
   void evaluate_rates() {
     using clock = std::chrono::steady_clock;
     ParticleView v = view();
-    const NeighborLists nl{fluid_cells_.view(), boundary_cells_.view()};
+    const NeighborLists nl = lists();
     auto t0 = clock::now();
-    compute_pressure(Space{}, v, 0, ps_.n_fluid, p_.eos);
-    if (p_.mdbc) update_mdbc(Space{}, v, nl, p_, ps_.wall_begin(), ps_.size());
-    if (p_.hbp || p_.sps) compute_viscous_state(Space{}, v, nl, p_, ps_.n_fluid);
+    compute_pressure(Space{}, v, 0, ps_.fluid_end(), p_.eos);  // halo copies too
+    if (p_.mdbc) {
+      update_mdbc(Space{}, v, nl, p_, ps_.wall_begin(), ps_.size(),
+                  ex_ ? wall_mine_.data() : nullptr);
+      if (ex_) {
+        sum_walls(ps_.rho);
+        sum_walls(ps_.press);
+        sum_walls(ps_.vel_bc);
+      }
+    }
+    if (p_.hbp || p_.sps) {
+      compute_viscous_state(Space{}, v, nl, p_, ps_.n_fluid);
+      if (p_.hbp) refresh_halo(visc_);
+      if (p_.sps) {
+        refresh_halo(sps_d_);
+        refresh_halo(sps_o_);
+      }
+    }
     auto t1 = clock::now();
     compute_rates(Space{}, v, nl, p_, 0, ps_.n_fluid, true, rate_.data());
     compute_rates(Space{}, v, nl, p_, ps_.wall_begin(), ps_.size(), false, rate_.data());
@@ -164,17 +206,36 @@ class Solver final : public SolverBase {
     ParticleView v = view();
     const Real* rate = rate_.data();
     const Index nf = ps_.n_fluid;
-    const Real amax2 = reduce<MaxOp, Real>(
+    Real amax2 = reduce<MaxOp, Real>(
         Space{}, nf, SPHDEM_LAMBDA(Index i) { return norm2(v.acc[i]); });
-    const Real rmax = reduce<MaxOp, Real>(
+    Real rmax = reduce<MaxOp, Real>(
         Space{}, nf, SPHDEM_LAMBDA(Index i) { return rate[i]; });
-    const Real vmax2 = reduce<MaxOp, Real>(
+    Real vmax2 = reduce<MaxOp, Real>(
         Space{}, nf, SPHDEM_LAMBDA(Index i) { return norm2(v.vel[i]); });
     st.rho_min = reduce<MinOp, Real>(
         Space{}, nf, SPHDEM_LAMBDA(Index i) { return v.rho[i]; });
     st.rho_max = reduce<MaxOp, Real>(
         Space{}, nf, SPHDEM_LAMBDA(Index i) { return v.rho[i]; });
-    if (nf == 0) {  // every fluid particle has left through the open ends
+    Real nu_max = 0;
+    if (p_.hbp) {
+      // Explicit viscous limit with the largest mu_eff / rho (kinematic).
+      const Real* visc = visc_.data();
+      nu_max = reduce<MaxOp, Real>(
+          Space{}, nf, SPHDEM_LAMBDA(Index i) { return visc[i] / v.rho[i]; });
+    }
+    if (ex_) {  // the extremes over all ranks (a rank without fluid gives the identities)
+      const Real lowest = -std::numeric_limits<Real>::max();
+      Real m[6] = {nf ? amax2 : lowest,       nf ? rmax : lowest,       nf ? vmax2 : lowest,
+                   nf ? -st.rho_min : lowest, nf ? st.rho_max : lowest, nf ? nu_max : lowest};
+      ex_->max(m, 6);
+      amax2 = m[0];
+      rmax = m[1];
+      vmax2 = m[2];
+      st.rho_min = -m[3];
+      st.rho_max = m[4];
+      nu_max = m[5];
+    }
+    if (global_fluid_ == 0) {  // every fluid particle has left through the open ends
       st.rho_min = st.rho_max = p_.eos.rho0;
     }
     st.max_speed = std::sqrt(std::max(vmax2, Real(0)));
@@ -183,10 +244,6 @@ class Solver final : public SolverBase {
     st.dt_acoustic = h / (p_.eos.c0 + std::max(rmax, Real(0)));
     st.dt_viscous = p_.laminar && p_.nu > 0 ? Real(0.125) * h * h / p_.nu : Real(1e30);
     if (p_.hbp) {
-      // Explicit viscous limit with the largest mu_eff / rho (kinematic).
-      const Real* visc = visc_.data();
-      const Real nu_max = reduce<MaxOp, Real>(
-          Space{}, nf, SPHDEM_LAMBDA(Index i) { return visc[i] / v.rho[i]; });
       st.dt_viscous = nu_max > 0 ? Real(0.125) * h * h / nu_max : Real(1e30);
     }
     Real dt = scene_.time.cfl * std::min(st.dt_force, st.dt_acoustic);
@@ -238,45 +295,153 @@ class Solver final : public SolverBase {
           }
           return Index(outside ? 1 : 0);
         });
-    if (out == 0) return 0;
-    ParticleSet<Host> h;
-    if constexpr (std::is_same_v<Space, Host>) {
-      h = std::move(ps_);
-    } else {
-      to_host(Space{}, ps_, h);
-    }
-    std::vector<char> keep(std::size_t(h.size()), 1);
-    for (Index i = 0; i < h.n_fluid; ++i) {
-      const Vec3 x = h.pos[i];
-      for (int k = 0; k < 3; ++k) {
-        if (p.grid.periodic[k] || (p.dim == 2 && k == 1)) continue;
-        if (!(x[k] >= p.domain_lo[k] && x[k] <= p.domain_hi[k])) keep[std::size_t(i)] = 0;
+    const Index out_all = ex_ ? Index(ex_->sum(std::int64_t(out))) : out;
+    if (out_all == 0) return 0;
+    Real mass_out = 0;
+    if (out > 0) {
+      ParticleSet<Host> h;
+      if constexpr (std::is_same_v<Space, Host>) {
+        h = std::move(ps_);
+      } else {
+        to_host(Space{}, ps_, h);
       }
-      if (!keep[std::size_t(i)]) {
-        ++removed_;
-        removed_mass_ += h.mass[i];
+      std::vector<char> keep(std::size_t(h.size()), 1);
+      for (Index i = 0; i < h.n_fluid; ++i) {
+        const Vec3 x = h.pos[i];
+        for (int k = 0; k < 3; ++k) {
+          if (p.grid.periodic[k] || (p.dim == 2 && k == 1)) continue;
+          if (!(x[k] >= p.domain_lo[k] && x[k] <= p.domain_hi[k])) keep[std::size_t(i)] = 0;
+        }
+        if (!keep[std::size_t(i)]) mass_out += h.mass[i];
+      }
+      Index w = 0;
+      const Index n = h.size();
+      for (Index i = 0; i < n; ++i) {
+        if (!keep[std::size_t(i)]) continue;
+        if (w != i) {
+          h.for_each_field(
+              [&](const char*, auto& field) { field[std::size_t(w)] = field[std::size_t(i)]; });
+        }
+        ++w;
+      }
+      h.n_fluid -= out;
+      h.resize(h.size());
+      if constexpr (std::is_same_v<Space, Host>) {
+        ps_ = std::move(h);
+      } else {
+        to_space(Space{}, std::move(h), ps_);
       }
     }
-    Index w = 0;
-    const Index n = h.size();
-    for (Index i = 0; i < n; ++i) {
-      if (!keep[std::size_t(i)]) continue;
-      if (w != i) {
-        h.for_each_field(
-            [&](const char*, auto& field) { field[std::size_t(w)] = field[std::size_t(i)]; });
-      }
-      ++w;
-    }
-    h.n_fluid -= out;
-    h.resize(h.size());
-    if constexpr (std::is_same_v<Space, Host>) {
-      ps_ = std::move(h);
-    } else {
-      to_space(Space{}, std::move(h), ps_);
-    }
+    if (ex_) ex_->sum(&mass_out, 1);
+    removed_ += out_all;
+    removed_mass_ += mass_out;
+    global_fluid_ -= out_all;
     // Boundary slots moved down: re-mark the boundary list.
-    sort_boundary();
-    return out;
+    if (out > 0) sort_boundary();
+    return out_all;
+  }
+
+  // The cell lists of the current layout.
+  NeighborLists lists() const {
+    return NeighborLists{fluid_cells_.view(), boundary_cells_.view(), halo_cells_.view(),
+                         ps_.n_halo > 0};
+  }
+
+  // Removes the halo slots (their owners hold the particles); walls move down.
+  void drop_halo() {
+    if (ps_.n_halo == 0) return;
+    const Index nf = ps_.n_fluid, nh = ps_.n_halo, n = ps_.size();
+    ps_.for_each_field([&](const char*, auto& field) {
+      using B = std::decay_t<decltype(field)>;
+      B tail;
+      tail.resize(std::size_t(n - nf - nh));
+      copy_range(field, nf + nh, n, tail, 0);
+      copy_range(tail, 0, n - nf - nh, field, nf);
+      field.resize(std::size_t(n - nh));
+    });
+    ps_.n_halo = 0;
+    shift_boundary(-nh);
+  }
+
+  // Copies src[b, e) to dst[at, ...) within one space.
+  template <class B>
+  static void copy_range(const B& src, Index b, Index e, B& dst, Index at) {
+    const auto* s = src.data();
+    auto* d = dst.data();
+    for_each(
+        Space{}, e - b, SPHDEM_LAMBDA(Index k) { d[at + k] = s[b + k]; });
+  }
+
+  // Boundary slots moved by `delta`: shift the boundary list's offsets (the walls keep their
+  // order).
+  void shift_boundary(Index delta) {
+    if (delta == 0) return;
+    std::uint32_t* st = boundary_cells_.start.data();
+    const Index nc = Index(boundary_cells_.start.size());
+    for_each(
+        Space{}, nc, SPHDEM_LAMBDA(Index c) { st[c] = std::uint32_t(Index(st[c]) + delta); });
+    boundary_cells_.begin += delta;
+  }
+
+  // Builds the halo (every field), sorts its range by (cell, id), and resizes the scratch.
+  void fill_halo() {
+    if constexpr (std::is_same_v<Space, Host>) {
+      if (!ex_) return;
+      ex_->build_halo(ps_);
+      shift_boundary(ps_.n_halo);
+      sort_range(ps_.n_fluid, ps_.n_halo, halo_cells_);
+      rate_.resize(std::size_t(ps_.size()));
+    }
+  }
+
+  // Sends the owned values of a field to the halo slots (in the halo's sorted order).
+  template <class T>
+  void refresh_halo(Buffer<T, Space>& field, bool positions = false) {
+    if constexpr (std::is_same_v<Space, Host>) {
+      if (!ex_ || ps_.n_halo == 0) {
+        if (ex_) {  // collective even without halo slots here
+          std::vector<T> none(1);
+          bcast_one(field.data(), none.data(), positions);
+        }
+        return;
+      }
+      const Index nf = ps_.n_fluid, nh = ps_.n_halo;
+      std::vector<T> leaves(static_cast<std::size_t>(nh));
+      bcast_one(field.data(), leaves.data(), positions);
+      const std::uint32_t* order = halo_cells_.order.data();
+      for (Index i = 0; i < nh; ++i) field[std::size_t(nf + i)] = leaves[order[i]];
+    }
+  }
+  void bcast_one(Real* owned, Real* halo, bool) { ex_->bcast(owned, halo); }
+  void bcast_one(Vec3* owned, Vec3* halo, bool positions) {
+    if (positions) {
+      ex_->bcast_positions(owned, halo);
+    } else {
+      ex_->bcast(owned, halo);
+    }
+  }
+
+  // Sums a wall field over ranks (each rank holds its share; the rest are zeros).
+  void sum_walls(Buffer<Real, Space>& f) {
+    ex_->sum(f.data() + ps_.wall_begin(), ps_.n_wall + ps_.n_grain);
+  }
+  void sum_walls(Buffer<Vec3, Space>& f) {
+    static_assert(sizeof(Vec3) == 3 * sizeof(Real), "Vec3 is three Reals");
+    ex_->sum(reinterpret_cast<Real*>(f.data() + ps_.wall_begin()), 3 * (ps_.n_wall + ps_.n_grain));
+  }
+
+  // Which wall slots this rank computes: those whose mDBC ghost node (or, with DBC, whose
+  // position) lies in its box. Walls are fixed, so this holds for the whole run.
+  void mark_wall_owners() {
+    const Index b = ps_.wall_begin(), n = ps_.n_wall + ps_.n_grain;
+    const ParticleSet<Host>& h = host_particles();
+    std::vector<std::uint8_t> mine(static_cast<std::size_t>(n));
+    for (Index k = 0; k < n; ++k)
+      mine[std::size_t(k)] = ex_->owns(p_.mdbc ? h.ghost[b + k] : h.pos[b + k]) ? 1 : 0;
+    wall_mine_.resize(std::size_t(n));
+    if constexpr (std::is_same_v<Space, Host>) {
+      for (Index k = 0; k < n; ++k) wall_mine_[std::size_t(k)] = mine[std::size_t(k)];
+    }
   }
 
  private:
@@ -285,7 +450,10 @@ class Solver final : public SolverBase {
   ParticleSet<Space> ps_;
   ParticleSet<Host> host_;
   bool host_valid_ = false;
-  CellList<Space> fluid_cells_, boundary_cells_;
+  std::shared_ptr<Exchange> ex_;
+  CellList<Space> fluid_cells_, boundary_cells_, halo_cells_;
+  Buffer<std::uint8_t, Space> wall_mine_;
+  Index global_fluid_ = 0;
   Buffer<Real, Space> rate_;
   Buffer<Real, Space> visc_;
   Buffer<Vec3, Space> sps_d_, sps_o_;

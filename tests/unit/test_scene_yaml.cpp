@@ -56,7 +56,7 @@ struct BadFile {
 const BadFile kBadFiles[] = {
     {"unknown_top_key.yaml",
      ":5: gravty: unknown key; allowed keys: name, dimension, domain, gravity, fluid, sph, time, "
-     "guards, checkpoint, frames, solids, fluid_blocks, diagnostics"},
+     "guards, checkpoint, parallel, frames, solids, fluid_blocks, diagnostics"},
     {"rheology_bad_model.yaml", ":5: fluid.rheology.model: 'bingham' is not one of newtonian, hbp"},
     {"rheology_needs_laminar.yaml",
      ":6: fluid.rheology.model: hbp needs fluid.viscosity.model: laminar (mu_eff drives the "
@@ -64,6 +64,8 @@ const BadFile kBadFiles[] = {
      "term)"},
     {"frames_bad_field.yaml",
      ":8: frames.fields[1]: 'pressure' is not one of vel, rho, press, acc, drho, mass, id"},
+    {"parallel_imbalance_below_one.yaml",
+     ":6: parallel.imbalance: value 0.5 is out of range; allowed [1, 100]"},
     {"checkpoint_negative.yaml",
      ":6: checkpoint.every_steps: value -5 is out of range; allowed [0, 2e9]"},
     {"unknown_nested_key.yaml",

@@ -1,0 +1,74 @@
+// A run on many ranks (DESIGN.md §5): the Exchange the solver uses, and the whole-set operations
+// the run loop needs around it (initial distribution, output shares, gathering for diagnostics,
+// redistribution after a restart).
+//
+// Data layout on a rank: owned fluid [0, n_fluid), halo copies, then every fixed-wall particle.
+// Walls are replicated (built identically on every rank); each wall's mDBC state is computed by
+// the rank owning its ghost node and summed over ranks, and the fluid force on a wall particle is
+// held as per-rank shares that add up. Checkpoints and frames take the walls from rank 0 only.
+#pragma once
+
+#include <mpi.h>
+
+#include <array>
+#include <memory>
+#include <optional>
+
+#include "decomposition/domain_decomposition.hpp"
+#include "decomposition/halo.hpp"
+#include "solver/exchange.hpp"
+
+namespace sphdem {
+
+class MpiExchange final : public Exchange {
+ public:
+  // width: the halo reach (2h plus a margin). procs: the process grid, 0 = PETSc chooses.
+  // imbalance: the max/mean owned-fluid ratio above which rebalance() acts.
+  MpiExchange(MPI_Comm comm, const CellGrid& grid, std::array<int, 3> procs, Real width,
+              double imbalance);
+
+  const DomainDecomposition& decomposition() const { return dd_; }
+  MPI_Comm comm() const { return dd_.comm(); }
+
+  int rank() const override { return dd_.rank(); }
+  int size() const override { return dd_.size(); }
+  bool owns(const Vec3& x) const override { return dd_.owns(x); }
+  void migrate(ParticleSet<Host>& ps) override;
+  void build_halo(ParticleSet<Host>& ps) override;
+  bool rebalance(ParticleSet<Host>& ps) override;
+  int rebalance_count() const { return rebalances_; }
+  double last_imbalance() const { return last_imbalance_; }
+  Index halo_count() const override { return plan_ ? plan_->n_halo() : 0; }
+  void bcast(const Real* owned, Real* halo) override { plan_->bcast(owned, halo); }
+  void bcast(const Vec3* owned, Vec3* halo) override { plan_->bcast(owned, halo); }
+  void bcast_positions(const Vec3* owned, Vec3* halo) override {
+    plan_->bcast_positions(owned, halo);
+  }
+  void sum(Real* v, Index n) override;
+  void max(Real* v, Index n) override;
+  std::int64_t sum(std::int64_t v) override;
+
+ private:
+  DomainDecomposition dd_;
+  Real width_;
+  double threshold_;
+  int rebalances_ = 0;
+  double last_imbalance_ = 1;
+  std::optional<HaloPlan> plan_;
+};
+
+// Keeps the fluid this rank owns out of a set every rank built alike; walls stay.
+void keep_owned_fluid(const Exchange& ex, ParticleSet<Host>& ps);
+
+// What this rank writes to a checkpoint or frame: its owned fluid, and the walls on rank 0 only.
+ParticleSet<Host> output_share(const ParticleSet<Host>& ps, int rank);
+
+// On rank 0: every rank's owned fluid, sorted by global id, then the walls with their `acc` (the
+// fluid force per unit mass) summed over ranks. Empty on the other ranks. Collective.
+ParticleSet<Host> gather_on_root(MPI_Comm comm, const ParticleSet<Host>& ps);
+
+// After each rank read its block of a checkpoint: every wall particle to every rank, and the
+// fluid to the rank owning it (through DMSwarm). Collective.
+void distribute_after_read(const MpiExchange& ex, ParticleSet<Host>& ps);
+
+}  // namespace sphdem

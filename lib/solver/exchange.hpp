@@ -1,0 +1,45 @@
+// What the solver needs from a domain decomposition (DESIGN.md §5). The solver stays free of MPI
+// and PETSc: decomposition/distributed.cpp implements this with a DMDA, neighbour migration and a
+// PetscSF halo. A solver without an Exchange runs on one rank.
+//
+// Per step, on every rank (all calls are collective):
+//   drop the halo -> remove/wrap -> migrate(leavers) -> sort owned by (cell, id)
+//   -> build_halo (every field) -> sort the halo range by (cell, id)
+// and within the step, bcast() refreshes halo copies of fields that changed (the symplectic
+// predictor; mu_eff and the SPS stress). Fixed-wall particles are replicated on every rank; their
+// mDBC state is computed by the rank owning the ghost node and summed over ranks.
+#pragma once
+
+#include "core/types.hpp"
+#include "solver/particles.hpp"
+
+namespace sphdem {
+
+class Exchange {
+ public:
+  virtual ~Exchange() = default;
+  virtual int rank() const = 0;
+  virtual int size() const = 0;
+  // Whether x lies in this rank's box (every point has exactly one owner).
+  virtual bool owns(const Vec3& x) const = 0;
+  // Moves the owned fluid [0, n_fluid) that left this rank's box to its owner. The set must have
+  // no halo. Throws RuntimeFault (nothing moved) if a particle would be lost.
+  virtual void migrate(ParticleSet<Host>& ps) = 0;
+  // When the owned-fluid imbalance (max/mean over ranks) exceeds the threshold, recomputes the
+  // boxes from the particle histogram and redistributes the owned fluid (no halo allowed).
+  // Returns whether it did.
+  virtual bool rebalance(ParticleSet<Host>& ps) = 0;
+  // Builds the halo plan from the owned positions and fills the halo slots with every field.
+  virtual void build_halo(ParticleSet<Host>& ps) = 0;
+  virtual Index halo_count() const = 0;
+  // Owned values [0, n_owned) to the halo copies, in the plan's leaf order.
+  virtual void bcast(const Real* owned, Real* halo) = 0;
+  virtual void bcast(const Vec3* owned, Vec3* halo) = 0;
+  virtual void bcast_positions(const Vec3* owned, Vec3* halo) = 0;
+  // In-place reductions over all ranks.
+  virtual void sum(Real* v, Index n) = 0;
+  virtual void max(Real* v, Index n) = 0;
+  virtual std::int64_t sum(std::int64_t v) = 0;
+};
+
+}  // namespace sphdem

@@ -1,0 +1,134 @@
+// The solver on many ranks against the same solver on one rank (issue #7): after 200 steps every
+// particle, looked up by global id, has the same position, velocity and density to 1e-9 relative,
+// and so do the front, the total energy and the fluid force on the tank. Decompositions along x,
+// y and z; Verlet with mDBC, symplectic with DBC, and the HBP rheology (halo mu_eff).
+#include <gtest/gtest.h>
+#include <mpi.h>
+
+#include <cmath>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "app/simulation.hpp"
+#include "decomposition/distributed.hpp"
+#include "diagnostics/probes.hpp"
+#include "io/scene_yaml.hpp"
+#include "mpi/mpi_test_util.hpp"
+#include "scene/build.hpp"
+
+namespace sphdem {
+namespace {
+
+using mpitest::all_ranks;
+
+constexpr int kSteps = 200;
+
+Scene scene_for(const std::string& file, std::vector<std::string> sets) {
+  return load_scene(std::string(SPHDEM_INPUTS) + "/" + file, sets);
+}
+
+// The one-rank run, on rank 0 only (the others wait at the comparison).
+ParticleSet<Host> serial_run(const Scene& scene) {
+  BuildReport rep;
+  ParticleSet<Host> ps = build_particles(scene, &rep);
+  const Real c0 = resolve_sound_speed(scene, rep);
+  auto solver = make_host_solver(scene, std::move(ps), c0);
+  for (int i = 0; i < kSteps; ++i) solver->step();
+  return solver->host_particles();
+}
+
+// Compares the gathered distributed state with the serial one on rank 0; true on every rank iff
+// everything agrees.
+bool same_as_serial(const Scene& scene, const ParticleSet<Host>& serial, std::array<int, 3> procs,
+                    std::string* why) {
+  std::ostringstream log;
+  BuildReport rep;
+  std::shared_ptr<MpiExchange> ex;
+  auto solver = make_solver(scene, Backend::kHost, log, &rep, &ex, procs);
+  if (!ex) {
+    *why = "no decomposition was made";
+    return all_ranks(false);
+  }
+  for (int i = 0; i < kSteps; ++i) solver->step();
+  const ParticleSet<Host> all = gather_on_root(ex->comm(), solver->host_particles());
+  bool ok = true;
+  std::ostringstream os;
+  if (mpitest::rank() == 0) {
+    if (all.n_fluid != serial.n_fluid || all.n_wall != serial.n_wall + serial.n_grain) {
+      os << "counts: fluid " << all.n_fluid << " vs " << serial.n_fluid << ", walls " << all.n_wall
+         << " vs " << serial.n_wall;
+      ok = false;
+    } else {
+      std::map<GlobalId, Index> at;
+      for (Index i = 0; i < serial.n_fluid; ++i) at[serial.id[i]] = i;
+      double worst = 0;
+      for (Index i = 0; i < all.n_fluid; ++i) {
+        const auto it = at.find(all.id[i]);
+        if (it == at.end()) {
+          os << "id " << all.id[i] << " is not in the serial run";
+          ok = false;
+          break;
+        }
+        const Index j = it->second;
+        worst = std::max(worst, double(norm(all.pos[i] - serial.pos[j])) / 0.1);
+        worst = std::max(worst, double(norm(all.vel[i] - serial.vel[j])) /
+                                    std::max(1e-3, double(norm(serial.vel[j]))));
+        worst =
+            std::max(worst, std::abs(double(all.rho[i] - serial.rho[j])) / double(serial.rho[j]));
+      }
+      if (worst > 1e-9) {
+        os << "largest relative difference by id " << worst;
+        ok = false;
+      }
+      const Vec3 dir(1, 0, 0);
+      const Real f1 = probe_front(serial, Vec3(), dir), fn = probe_front(all, Vec3(), dir);
+      const Energy e1 = probe_energy(serial, scene.gravity), en = probe_energy(all, scene.gravity);
+      const Vec3 w1 = probe_solid_force(serial, 0), wn = probe_solid_force(all, 0);
+      const double de =
+          std::abs(double((en.kinetic + en.potential) - (e1.kinetic + e1.potential))) /
+          double(e1.kinetic + e1.potential);
+      const double dw = double(norm(wn - w1)) / std::max(1e-30, double(norm(w1)));
+      if (std::abs(double(fn - f1)) > 1e-9 * std::abs(double(f1)) || de > 1e-9 || dw > 1e-9) {
+        os << "front " << fn << " vs " << f1 << ", energy rel " << de << ", tank force rel " << dw;
+        ok = false;
+      }
+    }
+  }
+  *why = os.str();
+  return all_ranks(ok);
+}
+
+TEST(DistributedRun, DamBreak3DAlongEachAxisMatchesOneRank) {
+  const Scene scene = scene_for("dam_break_3d.yaml", {"sph.dp=0.03"});
+  ParticleSet<Host> serial;
+  if (mpitest::rank() == 0) serial = serial_run(scene);
+  const int n = mpitest::size();
+  for (const std::array<int, 3> procs :
+       {std::array<int, 3>{n, 1, 1}, std::array<int, 3>{1, n, 1}, std::array<int, 3>{1, 1, n}}) {
+    std::string why;
+    EXPECT_TRUE(same_as_serial(scene, serial, procs, &why))
+        << procs[0] << "x" << procs[1] << "x" << procs[2] << ": " << why;
+  }
+}
+
+TEST(DistributedRun, SymplecticWithDbcMatchesOneRank) {
+  const Scene scene = scene_for("dam_break_3d.yaml",
+                                {"sph.dp=0.03", "time.integrator=symplectic", "sph.boundary=dbc"});
+  ParticleSet<Host> serial;
+  if (mpitest::rank() == 0) serial = serial_run(scene);
+  std::string why;
+  EXPECT_TRUE(same_as_serial(scene, serial, {0, 0, 0}, &why)) << why;
+}
+
+TEST(DistributedRun, HbpColumnCollapse2DMatchesOneRank) {
+  const Scene scene = scene_for("column_collapse_2d.yaml", {"sph.dp=0.01"});
+  ParticleSet<Host> serial;
+  if (mpitest::rank() == 0) serial = serial_run(scene);
+  std::string why;
+  EXPECT_TRUE(same_as_serial(scene, serial, {0, 1, 0}, &why)) << why;
+}
+
+}  // namespace
+}  // namespace sphdem
