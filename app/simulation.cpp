@@ -88,15 +88,32 @@ std::unique_ptr<SolverBase> make_solver(const Scene& scene, Backend backend, std
                          ": domain.periodic: a periodic axis runs on one rank only "
                          "for now (this run has " +
                          std::to_string(nranks) + " ranks)");
-    if (backend == Backend::kDevice)
-      throw InputError("--backend device: a run on " + std::to_string(nranks) +
-                       " ranks uses the host backend for now (the halo is exchanged from host "
-                       "memory)");
     auto ex = std::make_shared<MpiExchange>(MPI_COMM_WORLD, p.grid, procs, Real(2.02) * p.h,
                                             scene.parallel.imbalance);
     keep_owned_fluid(*ex, ps);
     ex->rebalance(ps);  // boxes from the initial histogram (DMSwarm moves the fluid)
     const auto pr = ex->decomposition().procs();
+    // One GPU per rank: the node-local rank modulo the GPUs this node has.
+    std::string why;
+    const auto gpus =
+        backend == Backend::kHost ? std::vector<cuda::GpuInfo>{} : cuda::list_gpus(&why);
+    if (backend == Backend::kDevice && gpus.empty())
+      throw InputError("--backend device: no usable GPU (" + why + ")");
+    if (!gpus.empty()) {
+      MPI_Comm node;
+      int local = 0;
+      MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node);
+      MPI_Comm_rank(node, &local);
+      MPI_Comm_free(&node);
+      const int dev = local % int(gpus.size());
+      cuda::select_device(dev);
+      log << "backend: device on every rank (rank 0: GPU " << dev << ", "
+          << gpus[std::size_t(dev)].name << "), " << nranks << " ranks as " << pr[0] << " x "
+          << pr[1] << " x " << pr[2] << " boxes, owned-fluid imbalance (max/mean) "
+          << ex->last_imbalance() << "\n";
+      if (exchange) *exchange = ex;
+      return make_device_solver(scene, std::move(ps), c0, ex);
+    }
     log << "backend: host, " << host_thread_count() << " OpenMP threads per rank, " << nranks
         << " ranks as " << pr[0] << " x " << pr[1] << " x " << pr[2]
         << " boxes, owned-fluid imbalance (max/mean) " << ex->last_imbalance() << "\n";

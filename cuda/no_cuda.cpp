@@ -39,7 +39,8 @@ void synchronize() {}
 #include "solver/solver.hpp"
 
 namespace sphdem {
-std::unique_ptr<SolverBase> make_device_solver(const Scene&, ParticleSet<Host>, Real) {
+std::unique_ptr<SolverBase> make_device_solver(const Scene&, ParticleSet<Host>, Real,
+                                               std::shared_ptr<Exchange>) {
   throw RuntimeFault("sphdem was built without CUDA (SPHDEM_ENABLE_CUDA=OFF): no device solver");
 }
 }  // namespace sphdem

@@ -8,8 +8,8 @@ namespace sphdem {
 template class Solver<Device>;
 
 std::unique_ptr<SolverBase> make_device_solver(const Scene& scene, ParticleSet<Host> particles,
-                                               Real c0) {
-  return std::make_unique<Solver<Device>>(scene, std::move(particles), c0);
+                                               Real c0, std::shared_ptr<Exchange> ex) {
+  return std::make_unique<Solver<Device>>(scene, std::move(particles), c0, std::move(ex));
 }
 
 }  // namespace sphdem

@@ -67,6 +67,6 @@ class SolverBase {
 std::unique_ptr<SolverBase> make_host_solver(const Scene& scene, ParticleSet<Host> particles,
                                              Real c0, std::shared_ptr<Exchange> ex = nullptr);
 std::unique_ptr<SolverBase> make_device_solver(const Scene& scene, ParticleSet<Host> particles,
-                                               Real c0);
+                                               Real c0, std::shared_ptr<Exchange> ex = nullptr);
 
 }  // namespace sphdem

@@ -32,10 +32,6 @@ class Solver final : public SolverBase {
   Solver(const Scene& scene, ParticleSet<Host> particles, Real c0,
          std::shared_ptr<Exchange> ex = nullptr)
       : scene_(scene), p_(make_step_params(scene, c0)), ex_(std::move(ex)) {
-    if (ex_ && !std::is_same_v<Space, Host>)
-      throw InputError("a run on " + std::to_string(ex_->size()) +
-                       " ranks uses the host backend (the halo is exchanged from host memory); "
-                       "pass --backend host");
     adopt(std::move(particles));
     verlet_count_ = 0;
   }
@@ -68,12 +64,14 @@ class Solver final : public SolverBase {
     auto t0 = clock::now();
     drop_halo();
     st.removed = remove_and_wrap();
-    if constexpr (std::is_same_v<Space, Host>) {
-      if (ex_) {
-        ex_->migrate(ps_);
+    if (ex_) {
+      bool rebalanced = false;
+      on_host([&](ParticleSet<Host>& h) {
+        ex_->migrate(h);
         const int every = scene_.parallel.rebalance_every;
-        if (every > 0 && step_ > 0 && step_ % every == 0 && ex_->rebalance(ps_)) mark_wall_owners();
-      }
+        rebalanced = every > 0 && step_ > 0 && step_ % every == 0 && ex_->rebalance(h);
+      });
+      if (rebalanced) mark_wall_owners();
     }
     sort_fluid();
     auto t1 = clock::now();
@@ -385,32 +383,59 @@ class Solver final : public SolverBase {
 
   // Builds the halo (every field), sorts its range by (cell, id), and resizes the scratch.
   void fill_halo() {
+    if (!ex_) return;
+    on_host([&](ParticleSet<Host>& h) { ex_->build_halo(h); });
+    shift_boundary(ps_.n_halo);
+    sort_range(ps_.n_fluid, ps_.n_halo, halo_cells_);
+    rate_.resize(std::size_t(ps_.size()));
+  }
+
+  // Runs f on the particles in host memory: in place on the host; on the device through a full
+  // host copy and back (MPI here is not CUDA-aware; a first, unoptimised staging).
+  template <class F>
+  void on_host(F&& f) {
+    host_valid_ = false;
     if constexpr (std::is_same_v<Space, Host>) {
-      if (!ex_) return;
-      ex_->build_halo(ps_);
-      shift_boundary(ps_.n_halo);
-      sort_range(ps_.n_fluid, ps_.n_halo, halo_cells_);
-      rate_.resize(std::size_t(ps_.size()));
+      f(ps_);
+    } else {
+      ParticleSet<Host> h;
+      to_host(Space{}, ps_, h);
+      f(h);
+      to_space(Space{}, std::move(h), ps_);
     }
+  }
+
+  // A host view of a buffer: the buffer's own storage on the host, a downloaded copy on the
+  // device (put back with put_host).
+  template <class T, class B>
+  static T* get_host(B& b, std::vector<T>& tmp) {
+    if constexpr (std::is_same_v<Space, Host>) {
+      return b.data();
+    } else {
+      b.download(tmp);
+      return tmp.data();
+    }
+  }
+  template <class T, class B>
+  static void put_host(B& b, const std::vector<T>& tmp) {
+    if constexpr (!std::is_same_v<Space, Host>) b.upload(tmp);
   }
 
   // Sends the owned values of a field to the halo slots (in the halo's sorted order).
   template <class T>
   void refresh_halo(Buffer<T, Space>& field, bool positions = false) {
-    if constexpr (std::is_same_v<Space, Host>) {
-      if (!ex_ || ps_.n_halo == 0) {
-        if (ex_) {  // collective even without halo slots here
-          std::vector<T> none(1);
-          bcast_one(field.data(), none.data(), positions);
-        }
-        return;
-      }
-      const Index nf = ps_.n_fluid, nh = ps_.n_halo;
-      std::vector<T> leaves(static_cast<std::size_t>(nh));
-      bcast_one(field.data(), leaves.data(), positions);
-      const std::uint32_t* order = halo_cells_.order.data();
-      for (Index i = 0; i < nh; ++i) field[std::size_t(nf + i)] = leaves[order[i]];
-    }
+    if (!ex_) return;  // collective: every rank calls it, with or without halo slots
+    host_valid_ = false;
+    const Index nf = ps_.n_fluid, nh = ps_.n_halo;
+    std::vector<T> tmp;
+    T* f = get_host<T>(field, tmp);
+    std::vector<T> leaves(static_cast<std::size_t>(std::max<Index>(nh, 1)));
+    bcast_one(f, leaves.data(), positions);
+    std::vector<std::uint32_t> otmp;
+    const std::uint32_t* order =
+        nh > 0 ? get_host<std::uint32_t>(halo_cells_.order, otmp) : nullptr;
+    for (Index i = 0; i < nh; ++i) f[nf + i] = leaves[order[i]];
+    put_host<T>(field, tmp);
   }
   void bcast_one(Real* owned, Real* halo, bool) { ex_->bcast(owned, halo); }
   void bcast_one(Vec3* owned, Vec3* halo, bool positions) {
@@ -422,12 +447,15 @@ class Solver final : public SolverBase {
   }
 
   // Sums a wall field over ranks (each rank holds its share; the rest are zeros).
-  void sum_walls(Buffer<Real, Space>& f) {
-    ex_->sum(f.data() + ps_.wall_begin(), ps_.n_wall + ps_.n_grain);
-  }
-  void sum_walls(Buffer<Vec3, Space>& f) {
-    static_assert(sizeof(Vec3) == 3 * sizeof(Real), "Vec3 is three Reals");
-    ex_->sum(reinterpret_cast<Real*>(f.data() + ps_.wall_begin()), 3 * (ps_.n_wall + ps_.n_grain));
+  template <class T>
+  void sum_walls(Buffer<T, Space>& field) {
+    static_assert(sizeof(T) % sizeof(Real) == 0, "a field of Reals");
+    constexpr Index k = Index(sizeof(T) / sizeof(Real));
+    host_valid_ = false;
+    std::vector<T> tmp;
+    T* f = get_host<T>(field, tmp);
+    ex_->sum(reinterpret_cast<Real*>(f + ps_.wall_begin()), k * (ps_.n_wall + ps_.n_grain));
+    put_host<T>(field, tmp);
   }
 
   // Which wall slots this rank computes: those whose mDBC ghost node (or, with DBC, whose
@@ -438,9 +466,10 @@ class Solver final : public SolverBase {
     std::vector<std::uint8_t> mine(static_cast<std::size_t>(n));
     for (Index k = 0; k < n; ++k)
       mine[std::size_t(k)] = ex_->owns(p_.mdbc ? h.ghost[b + k] : h.pos[b + k]) ? 1 : 0;
-    wall_mine_.resize(std::size_t(n));
     if constexpr (std::is_same_v<Space, Host>) {
-      for (Index k = 0; k < n; ++k) wall_mine_[std::size_t(k)] = mine[std::size_t(k)];
+      wall_mine_.vec() = mine;
+    } else {
+      wall_mine_.upload(mine);
     }
   }
 
