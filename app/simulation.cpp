@@ -352,10 +352,12 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
   MPI_Comm comm = ex ? ex->comm() : MPI_COMM_SELF;
   // What this rank writes (checkpoints, frames), and what rank 0 evaluates diagnostics on.
   auto share = [&]() {
-    return ex ? output_share(solver->host_particles(), rank) : solver->host_particles();
+    return ex ? output_share(solver->host_particles(), solver->wall_mine())
+              : solver->host_particles();
   };
   auto gathered = [&]() {
-    return ex ? gather_on_root(comm, solver->host_particles()) : solver->host_particles();
+    return ex ? gather_on_root(comm, solver->host_particles(), solver->wall_mine())
+              : solver->host_particles();
   };
   log << slog.str();
   const StepParams& p = solver->params();

@@ -1,6 +1,7 @@
 #include "decomposition/distributed.hpp"
 
 #include <algorithm>
+#include <limits>
 #include <numeric>
 #include <string>
 #include <type_traits>
@@ -17,23 +18,26 @@ MPI_Datatype mpi_real() {
   return std::is_same<Real, double>::value ? MPI_DOUBLE : MPI_FLOAT;
 }
 
-// A new set holding fluid slots [0, nf) and boundary slots [wb, we) of `ps`.
-ParticleSet<Host> slice(const ParticleSet<Host>& ps, Index nf, Index wb, Index we) {
+// A new set holding the fluid slots [0, n_fluid) of `ps` and the wall slots whose flag is set.
+ParticleSet<Host> select(const ParticleSet<Host>& ps, const std::vector<std::uint8_t>& mine) {
   ParticleSet<Host> out;
-  out.n_fluid = nf;
-  out.n_wall = we - wb;
+  const Index nf = ps.n_fluid, wb = ps.wall_begin(), n = ps.size();
+  std::vector<Index> slots;
+  for (Index i = 0; i < nf; ++i) slots.push_back(i);
+  for (Index i = wb; i < n; ++i)
+    if (mine[std::size_t(i - wb)]) slots.push_back(i);
   auto& src = const_cast<ParticleSet<Host>&>(ps);  // for_each_field is not const; read only
-  src.for_each_field([&](const char* name, auto& b) {
-    out.for_each_field([&](const char* n2, auto& o) {
-      if (std::string(name) != n2) return;
-      using T = std::decay_t<decltype(o[0])>;
-      if constexpr (std::is_same_v<T, std::decay_t<decltype(b[0])>>) {
-        auto& v = o.vec();
-        v.assign(b.vec().begin(), b.vec().begin() + nf);
-        v.insert(v.end(), b.vec().begin() + wb, b.vec().begin() + we);
-      }
-    });
+  std::vector<void*> outs;
+  out.for_each_field([&](const char*, auto& o) { outs.push_back(&o); });
+  std::size_t k = 0;
+  src.for_each_field([&](const char*, auto& b) {
+    auto* o = static_cast<std::decay_t<decltype(b)>*>(outs[k++]);
+    auto& v = o->vec();
+    v.resize(slots.size());
+    for (std::size_t j = 0; j < slots.size(); ++j) v[j] = b[std::size_t(slots[j])];
   });
+  out.n_fluid = nf;
+  out.n_wall = Index(slots.size()) - nf;
   return out;
 }
 
@@ -122,59 +126,97 @@ void keep_owned_fluid(const Exchange& ex, ParticleSet<Host>& ps) {
   ps.n_halo = 0;
 }
 
-ParticleSet<Host> output_share(const ParticleSet<Host>& ps, int rank) {
-  return slice(ps, ps.n_fluid, ps.wall_begin(), rank == 0 ? ps.size() : ps.wall_begin());
+ParticleSet<Host> output_share(const ParticleSet<Host>& ps, const std::vector<std::uint8_t>& mine) {
+  return select(ps, mine);
 }
 
-ParticleSet<Host> gather_on_root(MPI_Comm comm, const ParticleSet<Host>& ps) {
+namespace {
+
+// On rank 0: slots [b, e) of every rank's `ps`, as one set sorted by global id (fields only; the
+// counts are the caller's). Collective.
+ParticleSet<Host> gather_sorted(MPI_Comm comm, ParticleSet<Host>& ps, Index b, Index e,
+                                Index* total_out) {
   int rank = 0;
   MPI_Comm_rank(comm, &rank);
-  auto& src = const_cast<ParticleSet<Host>&>(ps);
   ParticleSet<Host> out;
-  const Index nw = ps.size() - ps.wall_begin();
+  std::vector<void*> outs;
+  out.for_each_field([&](const char*, auto& o) { outs.push_back(&o); });
+  std::size_t k = 0;
   long long total = 0;
-  src.for_each_field([&](const char* name, auto& b) {
-    using T = std::decay_t<decltype(b[0])>;
-    const Counts c = gather_counts(comm, ps.n_fluid, sizeof(T), false);
+  ps.for_each_field([&](const char*, auto& buf) {
+    using T = std::decay_t<decltype(buf[0])>;
+    const Counts c = gather_counts(comm, e - b, sizeof(T), false);
     total = c.total;
     std::vector<T> all(rank == 0 ? std::size_t(c.total) : 0);
-    MPI_Gatherv(b.data(), int(ps.n_fluid * Index(sizeof(T))), MPI_BYTE, all.data(), c.count.data(),
-                c.disp.data(), MPI_BYTE, 0, comm);
-    if (rank != 0) return;
-    out.for_each_field([&](const char* n2, auto& o) {
-      if constexpr (std::is_same_v<std::decay_t<decltype(o[0])>, T>) {
-        if (std::string(name) == n2) o.vec() = std::move(all);
-      }
-    });
+    MPI_Gatherv(buf.data() + b, int((e - b) * Index(sizeof(T))), MPI_BYTE, all.data(),
+                c.count.data(), c.disp.data(), MPI_BYTE, 0, comm);
+    static_cast<std::decay_t<decltype(buf)>*>(outs[k++])->vec() = std::move(all);
   });
-  // The walls' fluid force: each rank holds its share.
-  std::vector<Vec3> acc(static_cast<std::size_t>(nw));
-  MPI_Reduce(ps.acc.data() + ps.wall_begin(), acc.data(), int(3 * nw), mpi_real(), MPI_SUM, 0,
-             comm);
-  if (rank != 0) return ParticleSet<Host>{};
-  // Sort the fluid by id, then append the walls.
-  const Index nf = Index(total);
-  std::vector<Index> perm(static_cast<std::size_t>(nf));
+  *total_out = Index(total);
+  if (rank != 0) return out;
+  std::vector<Index> perm(static_cast<std::size_t>(total));
   std::iota(perm.begin(), perm.end(), Index(0));
   std::sort(perm.begin(), perm.end(),
-            [&](Index a, Index b) { return out.id[std::size_t(a)] < out.id[std::size_t(b)]; });
-  const Index wb = ps.wall_begin();
-  src.for_each_field([&](const char* name, auto& b) {
-    using T = std::decay_t<decltype(b[0])>;
-    out.for_each_field([&](const char* n2, auto& o) {
-      if constexpr (std::is_same_v<std::decay_t<decltype(o[0])>, T>) {
-        if (std::string(name) != n2) return;
-        std::vector<T> v(std::size_t(nf + nw));
-        for (Index i = 0; i < nf; ++i) v[std::size_t(i)] = o[std::size_t(perm[std::size_t(i)])];
-        std::copy(b.vec().begin() + wb, b.vec().end(), v.begin() + nf);
-        o.vec() = std::move(v);
-      }
-    });
+            [&](Index x, Index y) { return out.id[std::size_t(x)] < out.id[std::size_t(y)]; });
+  out.for_each_field([&](const char*, auto& o) {
+    auto v = o.vec();
+    for (std::size_t j = 0; j < perm.size(); ++j) o[j] = v[std::size_t(perm[j])];
   });
-  std::copy(acc.begin(), acc.end(), out.acc.vec().begin() + nf);
-  out.n_fluid = nf;
-  out.n_wall = nw;
   return out;
+}
+
+}  // namespace
+
+ParticleSet<Host> gather_on_root(MPI_Comm comm, const ParticleSet<Host>& ps,
+                                 const std::vector<std::uint8_t>& mine) {
+  int rank = 0;
+  MPI_Comm_rank(comm, &rank);
+  ParticleSet<Host> local = select(ps, mine);
+  Index nf = 0, nw = 0;
+  ParticleSet<Host> fl = gather_sorted(comm, local, 0, local.n_fluid, &nf);
+  ParticleSet<Host> wl = gather_sorted(comm, local, local.n_fluid, local.size(), &nw);
+  if (rank != 0) return ParticleSet<Host>{};
+  std::vector<void*> walls;
+  wl.for_each_field([&](const char*, auto& w) { walls.push_back(&w); });
+  std::size_t k = 0;
+  fl.for_each_field([&](const char*, auto& f) {
+    auto* w = static_cast<std::decay_t<decltype(f)>*>(walls[k++]);
+    f.vec().insert(f.vec().end(), w->vec().begin(), w->vec().end());
+  });
+  fl.n_fluid = nf;
+  fl.n_wall = nw;
+  return fl;
+}
+
+std::vector<std::uint8_t> MpiExchange::keep_walls(const Vec3* pos, const Vec3* ghost, Index n,
+                                                  bool by_ghost) const {
+  // This rank's box, with the outer faces of non-periodic axes (and y in 2D) at infinity, as in
+  // owner_of.
+  constexpr Real kInf = std::numeric_limits<Real>::infinity();
+  const Vec3 blo = dd_.owned_lo(), bhi = dd_.owned_hi();
+  const auto np = dd_.procs();
+  const auto pc = dd_.proc_coord(dd_.rank());
+  const CellGrid& g = dd_.grid();
+  Real lo[3], hi[3];
+  for (int k = 0; k < 3; ++k) {
+    lo[k] = blo[k];
+    hi[k] = bhi[k];
+    const bool open = !g.periodic[k] || (g.dim == 2 && k == 1);
+    if (open && pc[std::size_t(k)] == 0) lo[k] = -kInf;
+    if (open && pc[std::size_t(k)] == np[std::size_t(k)] - 1) hi[k] = kInf;
+  }
+  std::vector<std::uint8_t> keep(static_cast<std::size_t>(n));
+  const Real w2 = width_ * width_;
+  for (Index i = 0; i < n; ++i) {
+    Real d2 = 0;
+    for (int k = 0; k < 3; ++k) {
+      const Real x = pos[i][k];
+      const Real d = x < lo[k] ? lo[k] - x : (x > hi[k] ? x - hi[k] : Real(0));
+      d2 += d * d;
+    }
+    keep[std::size_t(i)] = (d2 < w2 || dd_.owns(by_ghost ? ghost[i] : pos[i])) ? 1 : 0;
+  }
+  return keep;
 }
 
 void distribute_after_read(const MpiExchange& ex, ParticleSet<Host>& ps) {

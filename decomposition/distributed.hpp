@@ -16,6 +16,7 @@
 
 #include "decomposition/domain_decomposition.hpp"
 #include "decomposition/halo.hpp"
+#include "decomposition/wall_plan.hpp"
 #include "solver/exchange.hpp"
 
 namespace sphdem {
@@ -44,6 +45,16 @@ class MpiExchange final : public Exchange {
   void bcast_positions(const Vec3* owned, Vec3* halo) override {
     plan_->bcast_positions(owned, halo);
   }
+  std::vector<std::uint8_t> keep_walls(const Vec3* pos, const Vec3* ghost, Index n,
+                                       bool by_ghost) const override;
+  void build_wall_plan(const GlobalId* id, const std::uint8_t* mine, Index n) override {
+    walls_.reset();
+    walls_.emplace(dd_.comm(), id, mine, n);
+  }
+  void wall_bcast(Real* f) override { walls_->bcast(f); }
+  void wall_bcast(Vec3* f) override { walls_->bcast(f); }
+  void wall_reduce(Real* f) override { walls_->reduce_sum(f); }
+  void wall_reduce(Vec3* f) override { walls_->reduce_sum(f); }
   void sum(Real* v, Index n) override;
   void max(Real* v, Index n) override;
   std::int64_t sum(std::int64_t v) override;
@@ -55,17 +66,20 @@ class MpiExchange final : public Exchange {
   int rebalances_ = 0;
   double last_imbalance_ = 1;
   std::optional<HaloPlan> plan_;
+  std::optional<WallPlan> walls_;
 };
 
 // Keeps the fluid this rank owns out of a set every rank built alike; walls stay.
 void keep_owned_fluid(const Exchange& ex, ParticleSet<Host>& ps);
 
-// What this rank writes to a checkpoint or frame: its owned fluid, and the walls on rank 0 only.
-ParticleSet<Host> output_share(const ParticleSet<Host>& ps, int rank);
+// What this rank writes to a checkpoint or frame: its owned fluid and the walls it owns (`mine`:
+// one flag per wall slot).
+ParticleSet<Host> output_share(const ParticleSet<Host>& ps, const std::vector<std::uint8_t>& mine);
 
-// On rank 0: every rank's owned fluid, sorted by global id, then the walls with their `acc` (the
-// fluid force per unit mass) summed over ranks. Empty on the other ranks. Collective.
-ParticleSet<Host> gather_on_root(MPI_Comm comm, const ParticleSet<Host>& ps);
+// On rank 0: every rank's owned fluid, then every rank's owned walls, each sorted by global id
+// (owned walls carry the whole fluid force in `acc`). Empty on the other ranks. Collective.
+ParticleSet<Host> gather_on_root(MPI_Comm comm, const ParticleSet<Host>& ps,
+                                 const std::vector<std::uint8_t>& mine);
 
 // After each rank read its block of a checkpoint: every wall particle to every rank, and the
 // fluid to the rank owning it (through DMSwarm). Collective.

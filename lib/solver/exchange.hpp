@@ -6,9 +6,13 @@
 //   drop the halo -> remove/wrap -> migrate(leavers) -> sort owned by (cell, id)
 //   -> build_halo (every field) -> sort the halo range by (cell, id)
 // and within the step, bcast() refreshes halo copies of fields that changed (the symplectic
-// predictor; mu_eff and the SPS stress). Fixed-wall particles are replicated on every rank; their
-// mDBC state is computed by the rank owning the ghost node and summed over ranks.
+// predictor; mu_eff and the SPS stress). Each rank keeps the fixed-wall particles near its box
+// (keep_walls); a wall's mDBC state and fluid force are computed by its owner (the rank owning the
+// ghost node, or with DBC the particle) and the wall plan copies them to the other ranks' copies.
 #pragma once
+
+#include <cstdint>
+#include <vector>
 
 #include "core/types.hpp"
 #include "solver/particles.hpp"
@@ -36,6 +40,17 @@ class Exchange {
   virtual void bcast(const Real* owned, Real* halo) = 0;
   virtual void bcast(const Vec3* owned, Vec3* halo) = 0;
   virtual void bcast_positions(const Vec3* owned, Vec3* halo) = 0;
+  // Walls: 1 for each of n wall particles this rank keeps (within the halo width of its box, or,
+  // by_ghost, with the ghost node in its box).
+  virtual std::vector<std::uint8_t> keep_walls(const Vec3* pos, const Vec3* ghost, Index n,
+                                               bool by_ghost) const = 0;
+  // The plan between wall owners and copies (mine: 1 where this rank owns the slot).
+  virtual void build_wall_plan(const GlobalId* id, const std::uint8_t* mine, Index n) = 0;
+  // Owner values to the copies; the copies' partial sums added into the owner.
+  virtual void wall_bcast(Real* f) = 0;
+  virtual void wall_bcast(Vec3* f) = 0;
+  virtual void wall_reduce(Real* f) = 0;
+  virtual void wall_reduce(Vec3* f) = 0;
   // In-place reductions over all ranks.
   virtual void sum(Real* v, Index n) = 0;
   virtual void max(Real* v, Index n) = 0;

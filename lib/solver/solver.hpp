@@ -56,6 +56,8 @@ class SolverBase {
   virtual const PhaseTimes& phase_times() const = 0;
   // Number of neighbour pairs within 2h seen by the last force pass (for PIPS).
   virtual double last_pair_count() = 0;
+  // Many ranks: 1 for each wall slot of host_particles() this rank owns (empty on one rank).
+  virtual std::vector<std::uint8_t> wall_mine() const = 0;
   // Restart support: the counters, and replacing the whole state (particles and counters).
   virtual SolverCounters counters() const = 0;
   virtual void restore(ParticleSet<Host> particles, const SolverCounters& c) = 0;

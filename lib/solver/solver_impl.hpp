@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <numeric>
 #include <sstream>
 
 #include "core/error.hpp"
@@ -71,7 +72,7 @@ class Solver final : public SolverBase {
         const int every = scene_.parallel.rebalance_every;
         rebalanced = every > 0 && step_ > 0 && step_ % every == 0 && ex_->rebalance(h);
       });
-      if (rebalanced) mark_wall_owners();
+      if (rebalanced) reselect_walls();
     }
     sort_fluid();
     auto t1 = clock::now();
@@ -100,7 +101,6 @@ class Solver final : public SolverBase {
       integrate_verlet(Space{}, v, 0, nf, dt, euler);
     }
     if (!p_.mdbc) {
-      if (ex_) sum_walls(ps_.drho);
       integrate_dbc_density(Space{}, v, ps_.wall_begin(), ps_.size(), dt, p_.eos);
     }
     times_.integrate += std::chrono::duration<double>(clock::now() - t2).count();
@@ -146,11 +146,17 @@ class Solver final : public SolverBase {
     if (ex_) ex_->max(&m, 1);
     max_id_ = GlobalId(m);
     global_fluid_ = ex_ ? Index(ex_->sum(std::int64_t(particles.n_fluid))) : particles.n_fluid;
+    if (ex_) {  // every wall particle into the store; this rank keeps those it can use
+      wall_store_ = take_walls(particles);
+      append_walls(particles, select_walls());
+    }
     to_space(Space{}, std::move(particles), ps_);
     rate_.resize(std::size_t(ps_.size()));
     sort_boundary();
     if (ex_) mark_wall_owners();
   }
+
+  std::vector<std::uint8_t> wall_mine() const override { return mine_host_; }
 
   double last_pair_count() override {
     ParticleView v = view();
@@ -177,10 +183,10 @@ class Solver final : public SolverBase {
     if (p_.mdbc) {
       update_mdbc(Space{}, v, nl, p_, ps_.wall_begin(), ps_.size(),
                   ex_ ? wall_mine_.data() : nullptr);
-      if (ex_) {
-        sum_walls(ps_.rho);
-        sum_walls(ps_.press);
-        sum_walls(ps_.vel_bc);
+      if (ex_) {  // the owners' values to the other ranks' copies
+        wall_sync(ps_.rho, false);
+        wall_sync(ps_.press, false);
+        wall_sync(ps_.vel_bc, false);
       }
     }
     if (p_.hbp || p_.sps) {
@@ -194,6 +200,13 @@ class Solver final : public SolverBase {
     auto t1 = clock::now();
     compute_rates(Space{}, v, nl, p_, 0, ps_.n_fluid, true, rate_.data());
     compute_rates(Space{}, v, nl, p_, ps_.wall_begin(), ps_.size(), false, rate_.data());
+    if (ex_) {
+      wall_sync(ps_.acc, true);  // the owner holds the whole fluid force on its wall particles
+      if (!p_.mdbc) {            // DBC: the density rate is a sum over all ranks' fluid
+        wall_sync(ps_.drho, true);
+        wall_sync(ps_.drho, false);
+      }
+    }
     auto t2 = clock::now();
     times_.mdbc += std::chrono::duration<double>(t1 - t0).count();
     times_.forces += std::chrono::duration<double>(t2 - t1).count();
@@ -446,16 +459,100 @@ class Solver final : public SolverBase {
     }
   }
 
-  // Sums a wall field over ranks (each rank holds its share; the rest are zeros).
+  // Wall plan: reduce = add the copies' partial sums into the owners; otherwise copy the owners'
+  // values to the copies.
   template <class T>
-  void sum_walls(Buffer<T, Space>& field) {
-    static_assert(sizeof(T) % sizeof(Real) == 0, "a field of Reals");
-    constexpr Index k = Index(sizeof(T) / sizeof(Real));
+  void wall_sync(Buffer<T, Space>& field, bool reduce) {
     host_valid_ = false;
     std::vector<T> tmp;
-    T* f = get_host<T>(field, tmp);
-    ex_->sum(reinterpret_cast<Real*>(f + ps_.wall_begin()), k * (ps_.n_wall + ps_.n_grain));
+    T* f = get_host<T>(field, tmp) + ps_.wall_begin();
+    if (reduce) {
+      ex_->wall_reduce(f);
+    } else {
+      ex_->wall_bcast(f);
+    }
     put_host<T>(field, tmp);
+  }
+
+  // Moves the wall slots of a host set out into a set of their own, sorted by global id.
+  static ParticleSet<Host> take_walls(ParticleSet<Host>& ps) {
+    const Index wb = ps.wall_begin(), n = ps.size();
+    std::vector<Index> perm(static_cast<std::size_t>(n - wb));
+    std::iota(perm.begin(), perm.end(), wb);
+    std::sort(perm.begin(), perm.end(),
+              [&](Index a, Index b) { return ps.id[std::size_t(a)] < ps.id[std::size_t(b)]; });
+    ParticleSet<Host> w;
+    std::vector<void*> out;
+    w.for_each_field([&](const char*, auto& b) { out.push_back(&b); });
+    std::size_t k = 0;
+    ps.for_each_field([&](const char*, auto& b) {
+      auto* o = static_cast<std::decay_t<decltype(b)>*>(out[k++]);
+      o->vec().resize(perm.size());
+      for (std::size_t j = 0; j < perm.size(); ++j) (*o)[j] = b[std::size_t(perm[j])];
+      b.vec().resize(std::size_t(wb));
+    });
+    w.n_wall = n - wb;
+    ps.n_wall = 0;
+    ps.n_grain = 0;
+    return w;
+  }
+
+  // The store's walls this rank keeps (near its box, or whose ghost node it owns).
+  ParticleSet<Host> select_walls() const {
+    const Index n = wall_store_.n_wall;
+    const std::vector<std::uint8_t> keep =
+        ex_->keep_walls(wall_store_.pos.data(), wall_store_.ghost.data(), n, p_.mdbc);
+    ParticleSet<Host> w;
+    std::vector<void*> out;
+    w.for_each_field([&](const char*, auto& b) { out.push_back(&b); });
+    std::size_t k = 0;
+    auto& store = const_cast<ParticleSet<Host>&>(wall_store_);  // read only
+    store.for_each_field([&](const char*, auto& b) {
+      auto* o = static_cast<std::decay_t<decltype(b)>*>(out[k++]);
+      for (Index i = 0; i < n; ++i)
+        if (keep[std::size_t(i)]) o->vec().push_back(b[std::size_t(i)]);
+    });
+    w.n_wall = Index(w.id.size());
+    return w;
+  }
+
+  // Appends walls after the fluid and halo of a host set that has none.
+  static void append_walls(ParticleSet<Host>& ps, ParticleSet<Host>&& w) {
+    std::vector<void*> src;
+    w.for_each_field([&](const char*, auto& b) { src.push_back(&b); });
+    std::size_t k = 0;
+    ps.for_each_field([&](const char*, auto& b) {
+      auto* s = static_cast<std::decay_t<decltype(b)>*>(src[k++]);
+      b.vec().insert(b.vec().end(), s->vec().begin(), s->vec().end());
+    });
+    ps.n_wall = w.n_wall;
+  }
+
+  // After a rebalance: this rank's walls from the store for its new box. DBC walls carry their
+  // integrated density, so the store takes the owners' current values first.
+  void reselect_walls() {
+    if (!p_.mdbc) {
+      const ParticleSet<Host>& h = host_particles();
+      const Index b = h.wall_begin(), n = h.size() - b;
+      std::vector<Real> rho(std::size_t(wall_store_.n_wall), Real(0));
+      for (Index k = 0; k < n; ++k) {
+        if (!mine_host_[std::size_t(k)]) continue;
+        const auto& ids = wall_store_.id.vec();
+        const auto at = std::lower_bound(ids.begin(), ids.end(), h.id[std::size_t(b + k)]);
+        rho[std::size_t(at - ids.begin())] = h.rho[std::size_t(b + k)];
+      }
+      ex_->sum(rho.data(), Index(rho.size()));
+      wall_store_.rho.vec() = rho;
+      for (std::size_t i = 0; i < rho.size(); ++i)
+        wall_store_.press[i] = tait_pressure(p_.eos, rho[i]);
+    }
+    on_host([&](ParticleSet<Host>& h) {
+      take_walls(h);
+      append_walls(h, select_walls());
+    });
+    rate_.resize(std::size_t(ps_.size()));
+    sort_boundary();
+    mark_wall_owners();
   }
 
   // Which wall slots this rank computes: those whose mDBC ghost node (or, with DBC, whose
@@ -471,6 +568,8 @@ class Solver final : public SolverBase {
     } else {
       wall_mine_.upload(mine);
     }
+    mine_host_ = mine;
+    ex_->build_wall_plan(h.id.data() + b, mine.data(), n);
   }
 
  private:
@@ -482,6 +581,8 @@ class Solver final : public SolverBase {
   std::shared_ptr<Exchange> ex_;
   CellList<Space> fluid_cells_, boundary_cells_, halo_cells_;
   Buffer<std::uint8_t, Space> wall_mine_;
+  std::vector<std::uint8_t> mine_host_;  // wall slots this rank owns (many ranks only)
+  ParticleSet<Host> wall_store_;         // every wall particle, by id (many ranks only)
   Index global_fluid_ = 0;
   Buffer<Real, Space> rate_;
   Buffer<Real, Space> visc_;
