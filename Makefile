@@ -1,10 +1,12 @@
 # Thin wrapper over CMake/ctest. `make run` and `make test` are the README's two commands.
-# CUDA is built when nvcc is found (CUDA=ON/OFF forces it).
+# CUDA is built when nvcc is found (CUDA=ON/OFF forces it). CATALYST=ON builds the ParaView
+# Catalyst in-situ adaptor (needs paraview-dev python3-paraview; see README).
 BUILD ?= build
 JOBS ?= 2
 SCENE ?= inputs/dam_break_2d.yaml
 OUT ?= out/dam_break_2d
 CUDA ?=
+CATALYST ?=
 PRECISION ?= double
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
@@ -22,7 +24,8 @@ deps:
 	  ($(SUDO) apt-get update -q && DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -q $(PACKAGES))
 
 configure: deps
-	cmake -S . -B $(BUILD) -G Ninja -DSPHDEM_PRECISION=$(PRECISION) $(if $(CUDA),-DSPHDEM_ENABLE_CUDA=$(CUDA))
+	cmake -S . -B $(BUILD) -G Ninja -DSPHDEM_PRECISION=$(PRECISION) $(if $(CUDA),-DSPHDEM_ENABLE_CUDA=$(CUDA)) \
+	  $(if $(CATALYST),-DSPHDEM_ENABLE_CATALYST=$(CATALYST))
 
 build: configure
 	cmake --build $(BUILD) -j $(JOBS)

@@ -18,6 +18,7 @@
 #include "io/checkpoint.hpp"
 #include "io/csv_series.hpp"
 #include "io/frames.hpp"
+#include "io/insitu.hpp"
 
 namespace sphdem {
 
@@ -309,6 +310,15 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
         << " s) at t = " << solver->time() << " s\n";
   };
 
+  // ---- in situ (io/insitu.hpp): Catalyst extracts at insitu.every_steps; a no-op without
+  // insitu.scripts. Destroyed when run_scene returns, before MPI_Finalize. ----
+  std::unique_ptr<InSituAdaptor> insitu = make_insitu_adaptor(scene, opt.out_dir);
+  if (!scene.insitu.scripts.empty())
+    log << "in situ: " << insitu->name() << ", " << scene.insitu.scripts.size()
+        << " script(s) every " << scene.insitu.every_steps << " steps, extracts in " << opt.out_dir
+        << "/catalyst\n";
+  // ---- end in situ ----
+
   SignalGuard signals(opt.handle_signals);
   const bool tty = !opt.quiet && isatty(STDOUT_FILENO);
   using clock = std::chrono::steady_clock;
@@ -333,6 +343,8 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
         frames->write(solver->time(), solver->host_particles());
         next_frame += scene.frames.every;
       }
+      if (insitu->due(solver->step_count()))  // in situ (see above)
+        insitu->execute(solver->step_count(), solver->time(), solver->host_particles(), p);
       const StepStats st = solver->step();
       ++steps;
       particle_steps += double(solver->fluid_count());  // no device download
