@@ -5,13 +5,13 @@
 #   x (bin centre), z_surface (highest fluid particle centre in the bin + dp/2), n (particles),
 #   t, step
 # plus, on every row, runup = the highest z_surface of the step.
-# The centreline is the plane y = CENTRELINE_Y; in 3D only particles within 2h of it count (in 2D
-# every particle is on it).
+# The centreline is the plane y = CENTRELINE_Y (None: the middle of the fluid's y range at that
+# step); in 3D only particles within 2h of it count (in 2D every particle is on it).
 # Input channel "fluid" (io/insitu.hpp): fluid points; field data dp, h, dim, time, step.
 from paraview.simple import *
 from paraview import catalyst
 
-CENTRELINE_Y = 0.0
+CENTRELINE_Y = None
 
 fluid = TrivialProducer(registrationName='fluid')
 
@@ -26,8 +26,11 @@ fd = data.GetFieldData()
 get = lambda name: fd.GetArray(name).GetTuple1(0)
 dp, h, dim = get('dp'), get('h'), int(get('dim'))
 pts = np.asarray(inputs[0].Points, dtype=np.float64).reshape(-1, 3)
-if dim == 3:
-    pts = pts[np.abs(pts[:, 1] - %r) < 2 * h]
+if dim == 3 and len(pts):
+    yc = %r
+    if yc is None:
+        yc = 0.5 * (pts[:, 1].min() + pts[:, 1].max())
+    pts = pts[np.abs(pts[:, 1] - yc) < 2 * h]
 rows = {c: [] for c in ('x', 'z_surface', 'n')}
 if len(pts):
     x0 = pts[:, 0].min()
