@@ -17,6 +17,14 @@ export OMPI_MCA_rmaps_base_oversubscribe=1
 PACKAGES := build-essential cmake ninja-build pkg-config openmpi-bin libopenmpi-dev \
   libpetsc-real-dev libhdf5-openmpi-dev libgtest-dev libgmock-dev libyaml-cpp-dev libcli11-dev
 
+# CATALYST=ON also needs ParaView 5.11 and the -dev packages its CMake config asks for (about
+# 1.2 GB; DEPENDENCIES.md). python3-paraview also brings pvpython, which the paraview_xdmf test uses.
+PARAVIEW_PACKAGES := paraview-dev python3-paraview libutfcpp-dev liblz4-dev libdouble-conversion-dev \
+  libboost-dev libfreetype-dev libglew-dev libxml2-dev libx11-dev libnetcdf-dev
+ifeq ($(CATALYST),ON)
+PACKAGES += $(PARAVIEW_PACKAGES)
+endif
+
 .PHONY: deps configure build run test test-unit check clean
 
 deps:
