@@ -9,6 +9,7 @@
 #include "cuda/device.hpp"
 #include "decomposition/parallel_env.hpp"
 #include "io/hdf5_info.hpp"
+#include "io/insitu.hpp"
 #include "io/scene_yaml.hpp"
 #include "simulation.hpp"
 
@@ -26,7 +27,10 @@ void print_info(std::ostream& os) {
      << "  PETSc:          " << petsc_version() << "\n"
      << "  MPI:            " << mpi_version() << "\n"
      << "  HDF5:           " << hdf5_version() << "\n"
-     << "  Catalyst:       not built (SPHDEM_ENABLE_CATALYST=OFF)\n";
+     << "  Catalyst:       "
+     << (catalyst_compiled() ? "ParaView legacy Catalyst (insitu.scripts)"
+                             : "not built (SPHDEM_ENABLE_CATALYST=OFF)")
+     << "\n";
   std::string why;
   const auto gpus = cuda::list_gpus(&why);
   if (gpus.empty()) {

@@ -21,6 +21,7 @@
 #include "io/checkpoint.hpp"
 #include "io/csv_series.hpp"
 #include "io/frames.hpp"
+#include "io/insitu.hpp"
 
 namespace sphdem {
 
@@ -351,9 +352,13 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
   auto solver = make_solver(scene, opt.backend, slog, &rep, &ex, opt.procs);
   MPI_Comm comm = ex ? ex->comm() : MPI_COMM_SELF;
   // What this rank writes (checkpoints, frames), and what rank 0 evaluates diagnostics on.
-  auto share = [&]() {
-    return ex ? output_share(solver->host_particles(), solver->wall_mine())
-              : solver->host_particles();
+  // Calls f with this rank's share (one rank: the solver's particles, without a copy).
+  auto with_share = [&](auto&& f) {
+    if (ex) {
+      f(output_share(solver->host_particles(), solver->wall_mine()));
+    } else {
+      f(solver->host_particles());
+    }
   };
   auto gathered = [&]() {
     return ex ? gather_on_root(comm, solver->host_particles(), solver->wall_mine())
@@ -405,7 +410,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
 
   auto save = [&](const std::string& path) {
     CheckpointData cp;
-    cp.particles = share();  // a copy: the solver keeps its state
+    with_share([&](const ParticleSet<Host>& sh) { cp.particles = sh; });  // a copy
     cp.counters = solver->counters();
     cp.next_output_time = next_diag;
     cp.profile_next = diag.profile_state();
@@ -423,6 +428,15 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
     log << "checkpoint " << path << " (" << bytes / 1048576.0 << " MiB, " << s
         << " s) at t = " << solver->time() << " s\n";
   };
+
+  // ---- in situ (io/insitu.hpp): Catalyst extracts at insitu.every_steps; a no-op without
+  // insitu.scripts. Destroyed when run_scene returns, before MPI_Finalize. ----
+  std::unique_ptr<InSituAdaptor> insitu = make_insitu_adaptor(scene, opt.out_dir);
+  if (!scene.insitu.scripts.empty())
+    log << "in situ: " << insitu->name() << ", " << scene.insitu.scripts.size()
+        << " script(s) every " << scene.insitu.every_steps << " steps, extracts in " << opt.out_dir
+        << "/catalyst\n";
+  // ---- end in situ ----
 
   SignalGuard signals(opt.handle_signals);
   const bool tty = !opt.quiet && isatty(STDOUT_FILENO);
@@ -445,9 +459,13 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
         next_diag += scene.diagnostics.every;
       }
       if (frames && solver->time() >= next_frame - Real(1e-12)) {
-        frames->write(solver->time(), share());
+        with_share([&](const ParticleSet<Host>& sh) { frames->write(solver->time(), sh); });
         next_frame += scene.frames.every;
       }
+      if (insitu->due(solver->step_count()))  // in situ (see above)
+        with_share([&](const ParticleSet<Host>& sh) {
+          insitu->execute(solver->step_count(), solver->time(), sh, p);
+        });
       const StepStats st = solver->step();
       ++steps;
       particle_steps += double(solver->fluid_count());  // no device download
@@ -535,7 +553,8 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
     }
     if (!r.interrupted) {
       write_diagnostics();
-      if (frames) frames->write(solver->time(), share());
+      if (frames)
+        with_share([&](const ParticleSet<Host>& sh) { frames->write(solver->time(), sh); });
     }
   } catch (const StabilityError& e) {
     r.unstable = true;

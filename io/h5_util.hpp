@@ -89,7 +89,9 @@ inline void write_field(hid_t group, const char* name, const T* data, Index coun
   }
   hid_t xfer = H5Pcreate(H5P_DATASET_XFER);
   H5Pset_dxpl_mpio(xfer, H5FD_MPIO_COLLECTIVE);
-  const herr_t e = H5Dwrite(ds, Type<T>::id(), ms, fs, xfer, data);
+  // An empty dataset (no boundary particles anywhere) has no storage: HDF5 1.10 fails a
+  // collective write to it ("addr overflow"). `total` is global, so every rank skips it.
+  const herr_t e = total > 0 ? H5Dwrite(ds, Type<T>::id(), ms, fs, xfer, data) : herr_t(0);
   H5Pclose(xfer);
   H5Sclose(ms);
   H5Sclose(fs);
@@ -115,7 +117,10 @@ inline void read_field(hid_t group, const char* name, T* data, Index count, Inde
   }
   hid_t xfer = H5Pcreate(H5P_DATASET_XFER);
   H5Pset_dxpl_mpio(xfer, H5FD_MPIO_COLLECTIVE);
-  const herr_t e = H5Dread(ds, Type<T>::id(), ms, fs, xfer, data);
+  hsize_t extent[2] = {0, 0};
+  H5Sget_simple_extent_dims(fs, extent, nullptr);
+  // An empty dataset has no storage to read (see write_field); the extent is the same on all ranks.
+  const herr_t e = extent[0] > 0 ? H5Dread(ds, Type<T>::id(), ms, fs, xfer, data) : herr_t(0);
   H5Pclose(xfer);
   H5Sclose(ms);
   H5Sclose(fs);

@@ -63,6 +63,10 @@
 //     fields: [vel, rho, press]  # from: vel, rho, press, acc, drho, mass, id
 //     boundary: true             # also write wall boundary particles
 //     region: {lo: [..], hi: [..]}   # optional box limiting what is written
+//   insitu:                      # ParaView Catalyst extracts (build with SPHDEM_ENABLE_CATALYST)
+//     scripts: [catalyst/impact_force.py]   # required; Python files whose first line is
+//                                # "# script-version: 2", relative to the scene file's folder
+//     every_steps: 10            # [1, 2e9] steps between extract steps (step 0 included)
 //   solids:                      # a list; names are unique
 //     - name: tank               # required
 //       shape: {type: tank, inner_lo: [..], inner_hi: [..], thickness: 0.01}   # required
@@ -499,6 +503,7 @@ class Parser {
   void parse_checkpoint(const Field& f);
   void parse_parallel(const Field& f);
   void parse_frames(const Field& f);
+  void parse_insitu(const Field& f);
   void parse_solids(const Field& f);
   void parse_fluid_blocks(const Field& f);
   void parse_diagnostics(const Field& f);
@@ -574,10 +579,10 @@ Scene Parser::parse(const YAML::Node& root) {
   Scene s;
   s.source = file_;  // also the base folder of mesh paths
   scene_ = &s;
-  MapReader top =
-      map(Field{root, root.Mark(), ""},
-          {"name", "dimension", "domain", "gravity", "fluid", "sph", "time", "guards", "checkpoint",
-           "parallel", "frames", "solids", "fluid_blocks", "diagnostics"});
+  MapReader top = map(Field{root, root.Mark(), ""},
+                      {"name", "dimension", "domain", "gravity", "fluid", "sph", "time", "guards",
+                       "checkpoint", "parallel", "frames", "insitu", "solids", "fluid_blocks",
+                       "diagnostics"});
   s.name = name(top.require("name"));
   s.dim = dim_ = integer(top.require("dimension"), 2, 3);
   parse_domain(top.require("domain"));
@@ -592,6 +597,7 @@ Scene Parser::parse(const YAML::Node& root) {
   if (auto f = top.find("checkpoint")) parse_checkpoint(*f);
   if (auto f = top.find("parallel")) parse_parallel(*f);
   if (auto f = top.find("frames")) parse_frames(*f);
+  if (auto f = top.find("insitu")) parse_insitu(*f);
   if (auto f = top.find("solids")) parse_solids(*f);
   if (auto f = top.find("fluid_blocks")) parse_fluid_blocks(*f);
   if (auto f = top.find("diagnostics")) parse_diagnostics(*f);
@@ -739,6 +745,35 @@ void Parser::parse_frames(const Field& f) {
       if (!(p.region_hi[k] > p.region_lo[k])) fail(*r, "hi must exceed lo on every axis");
     }
   }
+}
+
+void Parser::parse_insitu(const Field& f) {
+  InSituParams& p = scene_->insitu;
+  MapReader m = map(f, {"scripts", "every_steps"});
+  Field f_list = m.require("scripts");
+  std::vector<Field> items = list(f_list);
+  if (items.empty()) fail(f_list, "expected at least one Catalyst script");
+  namespace fs = std::filesystem;
+  for (const Field& item : items) {
+    const std::string file = string(item);
+    if (file.empty()) fail(item, "expected a file name, got an empty string");
+    fs::path path(file);
+    if (path.is_relative()) path = fs::path(scene_->source).parent_path() / path;
+    const std::string resolved = path.string();
+    std::ifstream in(resolved);
+    if (!in) fail(item, "cannot open Catalyst script '" + resolved + "'");
+    // ParaView 5.11's vtkCPPythonScriptV2Pipeline runs only version-2 scripts; a legacy
+    // (version 1) script would fail much later, inside Catalyst, with a Python traceback.
+    std::string first;
+    std::getline(in, first);
+    if (first.rfind("# script-version: 2", 0) != 0) {
+      fail(item, "Catalyst script '" + resolved +
+                     "' must start with the line '# script-version: 2' (ParaView 5.11 legacy "
+                     "Catalyst runs version-2 scripts only)");
+    }
+    p.scripts.push_back(resolved);
+  }
+  p.every_steps = m.integer("every_steps", 1, 2000000000, int(p.every_steps));
 }
 
 void Parser::parse_solids(const Field& f) {

@@ -104,6 +104,13 @@ struct FrameParams {
   Vec3 region_lo, region_hi;
 };
 
+// In-situ analysis (io/insitu.hpp): ParaView Catalyst Python scripts run every `every_steps`
+// steps on the live particles. No scripts = off.
+struct InSituParams {
+  std::vector<std::string> scripts;  // paths, resolved against the scene file's folder
+  std::int64_t every_steps = 10;
+};
+
 struct Solid {
   std::string name;
   geom::SdfPtr sdf;  // phi < 0 inside the solid
@@ -166,6 +173,7 @@ struct Scene {
   CheckpointParams checkpoint;
   ParallelParams parallel;
   FrameParams frames;
+  InSituParams insitu;
   std::string yaml_text;  // the resolved scene as YAML, stored in outputs and checkpoints
 
   Real h() const;  // smoothing length

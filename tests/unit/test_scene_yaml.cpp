@@ -56,7 +56,7 @@ struct BadFile {
 const BadFile kBadFiles[] = {
     {"unknown_top_key.yaml",
      ":5: gravty: unknown key; allowed keys: name, dimension, domain, gravity, fluid, sph, time, "
-     "guards, checkpoint, parallel, frames, solids, fluid_blocks, diagnostics"},
+     "guards, checkpoint, parallel, frames, insitu, solids, fluid_blocks, diagnostics"},
     {"rheology_bad_model.yaml", ":5: fluid.rheology.model: 'bingham' is not one of newtonian, hbp"},
     {"rheology_needs_laminar.yaml",
      ":6: fluid.rheology.model: hbp needs fluid.viscosity.model: laminar (mu_eff drives the "
@@ -127,6 +127,13 @@ const BadFile kBadFiles[] = {
      ":12: diagnostics.forces[0].solid: no solid named 'tnk'; solids are: tank"},
     {"duplicate_solid_name.yaml",
      ":9: solids[1].name: duplicate solid name 'wall' (also solids[0].name)"},
+    {"insitu_missing_script.yaml",
+     ":7: insitu.scripts[0]: cannot open Catalyst script '@DIR@/no_such_script.py'"},
+    {"insitu_legacy_script.yaml",
+     ":7: insitu.scripts[0]: Catalyst script '@DIR@/legacy_catalyst_script.py' must start with the "
+     "line '# script-version: 2' (ParaView 5.11 legacy Catalyst runs version-2 scripts only)"},
+    {"insitu_every_zero.yaml", ":8: insitu.every_steps: value 0 is out of range; allowed [1, 2e9]"},
+    {"insitu_no_scripts.yaml", ":6: insitu.scripts: required key is missing"},
     {"duplicate_diagnostic_name.yaml",
      ":11: diagnostics.fronts[1].name: duplicate diagnostic name 'p1' (also "
      "diagnostics.pressure_gauges[0].name)"},

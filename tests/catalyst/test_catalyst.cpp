@@ -1,0 +1,201 @@
+// ParaView Catalyst in situ (io/catalyst_adaptor.cpp, inputs/catalyst/): a short dam-break run
+// with the three scripts produces the extracts, and the impact-force table equals the solver's
+// own force CSV at the same steps. Built only with SPHDEM_ENABLE_CATALYST=ON.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kScene = std::string(SPHDEM_SOURCE_DIR) + "/inputs/dam_break_2d.yaml";
+
+int sh(const std::string& cmd) {
+  const int st = std::system(cmd.c_str());
+  return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+}
+
+std::string slurp(const std::string& path) {
+  std::ifstream f(path);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+// CSV rows as strings split on ',' (quotes removed); the header row is skipped.
+std::vector<std::vector<std::string>> csv_rows(const std::string& path) {
+  std::vector<std::vector<std::string>> rows;
+  std::ifstream f(path);
+  std::string line;
+  bool header = true;
+  while (std::getline(f, line)) {
+    if (header) {
+      header = false;
+      continue;
+    }
+    std::vector<std::string> cells;
+    std::stringstream ss(line);
+    std::string c;
+    while (std::getline(ss, c, ',')) {
+      if (c.size() >= 2 && c.front() == '"') c = c.substr(1, c.size() - 2);
+      cells.push_back(c);
+    }
+    rows.push_back(cells);
+  }
+  return rows;
+}
+
+std::string step_file(const std::string& dir, const std::string& stem, int step,
+                      const std::string& ext) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "_%06d", step);
+  return dir + "/" + stem + buf + ext;
+}
+
+// Equal up to the solver CSV's 10 significant digits.
+void expect_same(double catalyst, double solver, const std::string& what) {
+  EXPECT_NEAR(catalyst, solver, 1e-9 * std::max(std::fabs(catalyst), std::fabs(solver)) + 1e-12)
+      << what;
+}
+
+// 800 fluid particles (dp = 2 * 0.00365) moving right at 1.5 m/s, a low barrier 0.024 m in front
+// of the column; extracts every 100 steps, solver force rows every step. One test, one run: ctest
+// runs tests as separate processes, side by side.
+constexpr int kEvery = 100, kSteps = 401, kFluid = 800;
+const std::string kOut = "catalyst_dam_break", kDir = kOut + "/catalyst";
+
+void check_impact_force() {
+  // Solver rows: one per step (diagnostics.every < dt), row i = the state after step i.
+  std::map<std::string, std::vector<std::vector<std::string>>> solver = {
+      {"tank", csv_rows(kOut + "/tank_force.csv")},
+      {"barrier", csv_rows(kOut + "/barrier_force.csv")}};
+  ASSERT_EQ(solver["tank"].size(), std::size_t(kSteps + 1));
+  int files = 0;
+  for (const auto& e : fs::directory_iterator(kDir))
+    files += e.path().filename().string().rfind("impact_force_", 0) == 0;
+  EXPECT_EQ(files, 5);  // steps 0, 100, ..., 400
+  EXPECT_FALSE(fs::exists(step_file(kDir, "impact_force", 50, ".csv")));
+  double barrier_fx_last = 0;
+  for (int step = 0; step < kSteps; step += kEvery) {
+    const auto rows = csv_rows(step_file(kDir, "impact_force", step, ".csv"));
+    ASSERT_EQ(rows.size(), 2u) << "step " << step;
+    for (const auto& r : rows) {
+      ASSERT_EQ(r.size(), 6u);
+      const std::string what = r[0] + " at step " + std::to_string(step);
+      ASSERT_TRUE(solver.count(r[0])) << what;
+      const auto& s = solver[r[0]][std::size_t(step)];
+      EXPECT_EQ(std::stod(r[5]), step) << what;
+      expect_same(std::stod(r[4]), std::stod(s[0]), what + ": t");
+      for (int k = 0; k < 3; ++k)
+        expect_same(std::stod(r[1 + k]), std::stod(s[1 + k]), what + ": f" + "xyz"[k]);
+      if (r[0] == "barrier") barrier_fx_last = std::stod(r[1]);
+    }
+  }
+  // The comparison is not one of zeros: the flow pushes on the barrier by step 400.
+  EXPECT_GT(barrier_fx_last, 100.0);
+}
+
+void check_runup() {
+  // Step 0: the column, 0.146 m wide (20 bins of dp) and 0.292 m high, all particles counted.
+  auto rows = csv_rows(step_file(kDir, "runup", 0, ".csv"));
+  ASSERT_EQ(rows.size(), 20u);
+  double n = 0;
+  for (const auto& r : rows) {
+    EXPECT_NEAR(std::stod(r[1]), 0.292, 1e-9);  // z_surface
+    EXPECT_NEAR(std::stod(r[5]), 0.292, 1e-9);  // runup
+    n += std::stod(r[2]);
+  }
+  EXPECT_EQ(n, kFluid);
+  // Step 400: the column has moved right up to the barrier's face (x = 0.17), not into it, and
+  // its top has dropped.
+  rows = csv_rows(step_file(kDir, "runup", 400, ".csv"));
+  ASSERT_FALSE(rows.empty());
+  double x_max = 0;
+  n = 0;
+  for (const auto& r : rows) {
+    x_max = std::max(x_max, std::stod(r[0]));
+    n += std::stod(r[2]);
+  }
+  EXPECT_EQ(n, kFluid);
+  EXPECT_GT(x_max, 0.16);
+  EXPECT_LT(x_max, 0.17);
+  EXPECT_LT(std::stod(rows[0][5]), 0.292);
+}
+
+void check_particles() {
+  for (int step = 0; step < kSteps; step += kEvery) {
+    const std::string piece = step_file(kDir, "particles", step, "");
+    const std::string f = piece + "/" + fs::path(piece).filename().string() + "_0.vtp";
+    const std::string xml = slurp(f);
+    ASSERT_FALSE(xml.empty()) << f;
+    EXPECT_NE(xml.find("NumberOfPoints=\"" + std::to_string(kFluid / 4) + "\""), std::string::npos)
+        << f;
+    for (const char* a : {"vel", "rho", "press", "id"})
+      EXPECT_NE(xml.find(std::string("Name=\"") + a + "\""), std::string::npos) << f << ": " << a;
+  }
+}
+
+TEST(Catalyst, DamBreakExtractsMatchTheSolver) {
+  fs::remove_all(kOut);
+  const std::string cmd =
+      std::string(SPHDEM_BINARY) + " run " + kScene + " --out " + kOut + " --quiet --max-steps " +
+      std::to_string(kSteps) +
+      " --set sph.dp=0.0073"
+      " --set 'solids=[{name: tank, shape: {type: tank, inner_lo: [0, -0.5, 0],"
+      " inner_hi: [0.584, 0.5, 0.35], thickness: 0.02}}, {name: barrier,"
+      " shape: {type: box, lo: [0.17, -0.5, 0], hi: [0.19, 0.5, 0.04]}}]'"
+      " --set 'fluid_blocks[0].velocity=[1.5, 0, 0]'"
+      " --set 'insitu={scripts: [catalyst/impact_force.py, catalyst/runup.py,"
+      " catalyst/particles.py], every_steps: " +
+      std::to_string(kEvery) +
+      "}'"
+      " --set 'diagnostics={every: 1e-9, energy: false, forces: [{name: tank_force,"
+      " solid: tank}, {name: barrier_force, solid: barrier}]}' > " +
+      kOut + ".log 2>&1";
+  // Exit 0: the processor was finalized before MPI_Finalize (otherwise Open MPI aborts).
+  ASSERT_EQ(sh(cmd), 0) << slurp(kOut + ".log");
+  EXPECT_NE(slurp(kOut + "/run.log").find("in situ: catalyst, 3 script(s) every 100 steps"),
+            std::string::npos);
+  const std::string timing = slurp(kDir + "/timing.json");
+  EXPECT_NE(timing.find("\"extract_steps\": 5,"), std::string::npos) << timing;
+  {
+    SCOPED_TRACE("impact force");
+    check_impact_force();
+  }
+  {
+    SCOPED_TRACE("run-up");
+    check_runup();
+  }
+  {
+    SCOPED_TRACE("decimated particles");
+    check_particles();
+  }
+}
+
+TEST(Catalyst, AFailingScriptStopsTheRunWithAMessage) {
+  fs::remove_all("catalyst_broken");
+  fs::create_directories("catalyst_broken");
+  const std::string script = fs::absolute("catalyst_broken/broken.py").string();
+  std::ofstream(script) << "# script-version: 2\nraise RuntimeError('broken on purpose')\n";
+  const int rc = sh(std::string(SPHDEM_BINARY) + " run " + kScene +
+                    " --out catalyst_broken/out --quiet --max-steps 5 --set sph.dp=0.0146"
+                    " --set 'insitu={scripts: [" +
+                    script + "]}' > catalyst_broken/log 2>&1");
+  EXPECT_EQ(rc, 1);
+  const std::string log = slurp("catalyst_broken/log");
+  EXPECT_NE(log.find("broken on purpose"), std::string::npos) << log;
+  EXPECT_NE(log.find("error: insitu: a Catalyst script failed at step 0"), std::string::npos)
+      << log;
+}
+
+}  // namespace
