@@ -1,0 +1,132 @@
+#!/usr/bin/env python3
+"""Stability map of the 2D dam break (issue #9): CFL number x density diffusion delta x
+resolution. Each run ends `completed` or with the guard that stopped it (DESIGN.md §7), read from
+the run's summary.json. Writes CSV rows and, with --plot, the map.
+
+  python3 jobs/stability_map.py --out out/stability_map [--end 0.6] [--jobs 2]
+  python3 jobs/stability_map.py --out out/stability_map --plot docs/figures/stability_map.png
+
+Runs whose result is already in OUT/map.csv are not repeated.
+"""
+import argparse
+import csv
+import itertools
+import json
+import os
+import subprocess
+import sys
+from concurrent.futures import ThreadPoolExecutor
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+L = 0.146
+CFLS = [0.1, 0.2, 0.3, 0.5]
+DELTAS = [0.0, 0.05, 0.1]
+RES = [20, 40]  # dp = L / RES
+
+GUARDS = [("NaN or Inf", "nan"), ("density out of bounds", "density"),
+          ("Mach number too high", "mach"), ("fluid inside a solid", "penetration"),
+          ("time step at its floor", "dt_floor")]
+
+
+def classify(summary):
+    status = summary.get("status", "?")
+    if status == "completed":
+        return "stable", ""
+    failure = summary.get("failure", "")
+    for text, name in GUARDS:
+        if text in failure:
+            return name, failure
+    return status, failure
+
+
+def run_one(args, cfl, delta, res):
+    name = f"cfl{cfl}_delta{delta}_L{res}"
+    out = os.path.join(args.out, name)
+    sets = [f"time.cfl={cfl}", f"fluid.diffusion.delta={delta}", f"sph.dp={L / res:.10g}",
+            f"time.end={args.end}"]
+    if delta == 0:
+        sets[1] = "fluid.diffusion.model=none"
+    cmd = [args.sphdem, "run", os.path.join(ROOT, "inputs/dam_break_2d.yaml"), "--out", out,
+           "--quiet"]
+    for s in sets:
+        cmd += ["--set", s]
+    env = dict(os.environ, OMP_NUM_THREADS="1")
+    p = subprocess.run(cmd, env=env, capture_output=True, text=True)
+    try:
+        with open(os.path.join(out, "summary.json")) as f:
+            summary = json.load(f)
+    except (OSError, ValueError):
+        return dict(cfl=cfl, delta=delta, res=res, result="error", t_end=0, steps=0, wall=0,
+                    failure=(p.stderr or p.stdout).strip().splitlines()[-1:])
+    result, failure = classify(summary)
+    return dict(cfl=cfl, delta=delta, res=res, result=result, t_end=summary["sim_time"],
+                steps=summary["steps"], wall=summary["wall_seconds"], failure=failure)
+
+
+def plot(rows, path):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    colours = {"stable": "tab:green", "density": "tab:orange", "nan": "tab:red",
+               "mach": "tab:purple", "penetration": "tab:brown", "dt_floor": "tab:gray",
+               "error": "black"}
+    fig, axes = plt.subplots(1, len(RES), figsize=(5 * len(RES), 4), sharey=True)
+    for ax, res in zip(axes, RES):
+        for r in rows:
+            if int(r["res"]) != res:
+                continue
+            x, y = float(r["cfl"]), float(r["delta"])
+            c = colours.get(r["result"], "black")
+            ax.scatter([x], [y], s=900, c=c, marker="s")
+            label = r["result"] if r["result"] == "stable" else f"{r['result']}\nt={float(r['t_end']):.2f}"
+            ax.annotate(label, (x, y), ha="center", va="center", fontsize=7, color="white")
+        ax.set_xscale("log")
+        ax.set_xticks(CFLS)
+        ax.set_xticklabels([str(c) for c in CFLS])
+        ax.set_yticks(DELTAS)
+        ax.set_xlim(0.07, 0.7)
+        ax.set_ylim(-0.03, 0.13)
+        ax.set_xlabel("CFL number (time.cfl)")
+        ax.set_title(f"2D dam break, dp = L/{res}")
+    axes[0].set_ylabel("density diffusion delta (0 = none)")
+    fig.suptitle("Where each run stops: stable to the end time, or the guard that fired")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--out", required=True)
+    ap.add_argument("--end", type=float, default=0.6)
+    ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--sphdem", default=os.path.join(ROOT, "build/sphdem"))
+    ap.add_argument("--plot", help="write the map PNG from OUT/map.csv and exit")
+    args = ap.parse_args()
+    os.makedirs(args.out, exist_ok=True)
+    table = os.path.join(args.out, "map.csv")
+    fields = ["cfl", "delta", "res", "result", "t_end", "steps", "wall", "failure"]
+    rows = []
+    if os.path.exists(table):
+        with open(table) as f:
+            rows = list(csv.DictReader(f))
+    if args.plot:
+        plot(rows, args.plot)
+        return 0
+    done = {(float(r["cfl"]), float(r["delta"]), int(r["res"])) for r in rows}
+    todo = [c for c in itertools.product(CFLS, DELTAS, RES) if c not in done]
+    with ThreadPoolExecutor(args.jobs) as pool:
+        for r in pool.map(lambda c: run_one(args, *c), todo):
+            rows.append(r)
+            print(f"cfl {r['cfl']} delta {r['delta']} L/{r['res']}: {r['result']} at t = "
+                  f"{float(r['t_end']):.3f} s ({r['steps']} steps, {float(r['wall']):.0f} s)",
+                  flush=True)
+            with open(table, "w", newline="") as f:
+                w = csv.DictWriter(f, fieldnames=fields)
+                w.writeheader()
+                for row in rows:
+                    w.writerow({k: row[k] for k in fields})
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
