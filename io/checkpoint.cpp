@@ -99,6 +99,134 @@ void ensure_mpi() {
   }
 }
 
+namespace {
+
+// FNV-1a over raw bytes: the DEM group's checksum.
+std::uint64_t fnv(std::uint64_t h, const void* p, std::size_t n) {
+  const auto* b = static_cast<const unsigned char*>(p);
+  for (std::size_t i = 0; i < n; ++i) h = (h ^ b[i]) * 1099511628211ULL;
+  return h;
+}
+
+// The DEM state as flat arrays, in a fixed order (write, read and checksum share it).
+struct DemArrays {
+  std::vector<Vec3> x, v, w, inertia, acc_prev, alpha_prev, wall_point, wall_offset, springs;
+  std::vector<Real> q, mass;  // q: 4 per body (w, x, y, z)
+  std::vector<std::int32_t> motion, shape, node;
+  std::vector<std::uint64_t> id, master, slave;
+
+  template <class F>
+  void each(F&& f) {
+    f("x", x), f("v", v), f("w", w), f("inertia", inertia), f("acc_prev", acc_prev);
+    f("alpha_prev", alpha_prev), f("wall_point", wall_point), f("wall_offset", wall_offset);
+    f("springs", springs), f("q", q), f("mass", mass), f("motion", motion), f("shape", shape);
+    f("node", node), f("id", id), f("master", master), f("slave", slave);
+  }
+  std::uint64_t checksum() {
+    std::uint64_t h = 1469598103934665603ULL;
+    each([&](const char*, auto& v) { h = fnv(h, v.data(), v.size() * sizeof(v[0])); });
+    return h;
+  }
+};
+
+DemArrays flatten(const dem::DemState& s) {
+  DemArrays a;
+  for (const dem::RigidBody& b : s.bodies) {
+    a.x.push_back(b.x);
+    a.v.push_back(b.v);
+    a.w.push_back(b.w);
+    a.inertia.push_back(b.inertia);
+    a.q.insert(a.q.end(), {b.q.w, b.q.x, b.q.y, b.q.z});
+    a.mass.push_back(b.mass);
+    a.motion.push_back(std::int32_t(b.motion));
+    a.shape.push_back(b.shape);
+    a.id.push_back(b.id);
+  }
+  a.acc_prev = s.acc_prev;
+  a.alpha_prev = s.alpha_prev;
+  a.wall_point = s.wall_point;
+  a.wall_offset = s.wall_offset;
+  a.springs = s.springs;
+  for (const dem::ContactKey& k : s.keys) {
+    a.master.push_back(k.master);
+    a.slave.push_back(k.slave);
+    a.node.push_back(std::int32_t(k.node));
+  }
+  return a;
+}
+
+dem::DemState unflatten(const DemArrays& a, Real time) {
+  dem::DemState s;
+  s.time = time;
+  for (std::size_t i = 0; i < a.x.size(); ++i) {
+    dem::RigidBody b;
+    b.x = a.x[i];
+    b.v = a.v[i];
+    b.w = a.w[i];
+    b.inertia = a.inertia[i];
+    b.q = Quat{a.q[4 * i], a.q[4 * i + 1], a.q[4 * i + 2], a.q[4 * i + 3]};
+    b.mass = a.mass[i];
+    b.motion = dem::Motion(a.motion[i]);
+    b.shape = a.shape[i];
+    b.id = a.id[i];
+    s.bodies.push_back(b);
+  }
+  s.acc_prev = a.acc_prev;
+  s.alpha_prev = a.alpha_prev;
+  s.wall_point = a.wall_point;
+  s.wall_offset = a.wall_offset;
+  s.springs = a.springs;
+  for (std::size_t i = 0; i < a.master.size(); ++i)
+    s.keys.push_back(dem::ContactKey{a.master[i], a.slave[i], std::uint32_t(a.node[i])});
+  return s;
+}
+
+// Rank 0 writes the replicated state; the other ranks take part with empty selections.
+void write_dem(hid_t f, const dem::DemState& s, int rank, const std::string& lab) {
+  DemArrays a = flatten(s);
+  hid_t grp = H5Gcreate2(f, "dem", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+  h5::write_attr<double>(grp, "time", H5T_NATIVE_DOUBLE, s.time);
+  h5::write_attr<std::uint64_t>(grp, "checksum", H5T_NATIVE_UINT64, a.checksum());
+  a.each([&](const char* name, auto& v) {
+    const Index n = Index(v.size());
+    h5::write_field(grp, name, v.data(), rank == 0 ? n : 0, 0, n, lab);
+  });
+  H5Gclose(grp);
+}
+
+dem::DemState read_dem(hid_t f, const std::string& path, const std::string& lab) {
+  if (H5Lexists(f, "dem", H5P_DEFAULT) <= 0) return {};
+  hid_t grp = H5Gopen2(f, "dem", H5P_DEFAULT);
+  DemArrays a;
+  double time = 0;
+  std::uint64_t sum = 0;
+  try {
+    time = h5::read_attr<double>(grp, "time", H5T_NATIVE_DOUBLE, lab);
+    sum = h5::read_attr<std::uint64_t>(grp, "checksum", H5T_NATIVE_UINT64, lab);
+    a.each([&](const char* name, auto& v) {
+      if (H5Lexists(grp, name, H5P_DEFAULT) <= 0)
+        h5::fail(lab, std::string("dem/") + name + " is missing");
+      hid_t ds = H5Dopen2(grp, name, H5P_DEFAULT);
+      hid_t sp = H5Dget_space(ds);
+      hsize_t dims[2] = {0, 0};
+      H5Sget_simple_extent_dims(sp, dims, nullptr);
+      H5Sclose(sp);
+      H5Dclose(ds);
+      v.resize(std::size_t(dims[0]));
+      h5::read_field(grp, name, v.data(), Index(dims[0]), 0, lab);
+    });
+  } catch (...) {
+    H5Gclose(grp);
+    throw;
+  }
+  H5Gclose(grp);
+  if (a.checksum() != sum)
+    throw InputError(path + ": DEM state checksum mismatch: the file is corrupted");
+  return unflatten(a, Real(time));
+}
+
+}  // namespace
+
 std::uint64_t write_checkpoint(const std::string& path, const CheckpointData& d) {
   ensure_mpi();
   const MPI_Comm comm = MPI_COMM_WORLD;
@@ -173,6 +301,7 @@ std::uint64_t write_checkpoint(const std::string& path, const CheckpointData& d)
     }
     H5Gclose(grp);
   }
+  if (!d.dem.bodies.empty()) write_dem(f, d.dem, rank, label(path));
   if (H5Fclose(f) < 0) throw InputError("cannot close checkpoint file '" + tmp + "'");
   MPI_Barrier(comm);
   if (rank == 0) {
@@ -292,6 +421,7 @@ CheckpointData read_checkpoint(const std::string& path) {
     std::uint64_t sum_local = local_checksum(ps), sum = 0;
     MPI_Allreduce(&sum_local, &sum, 1, MPI_UINT64_T, MPI_SUM, comm);
     if (sum != checksum) fail(path, "checksum mismatch: the file is corrupted");
+    d.dem = read_dem(f, path, label(path));
   } catch (...) {
     H5Fclose(f);
     throw;

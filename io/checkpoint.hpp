@@ -2,6 +2,8 @@
 // rank writes its hyperslab of every field, at offsets from MPI_Exscan. Contents:
 //   /fluid/<field>, /boundary/<field>   every particle field (Vec3 fields as N x 3), by global id
 //   /scene_yaml                         the resolved scene (text)
+//   /dem/...                            grain states, integrator rates, moving walls, tangential
+//                                       contact history (keys and springs), with its own checksum
 //   attributes on /                     format_version, time, step, verlet_count, removed,
 //                                       removed_mass, dim, dp, precision, next_output_time,
 //                                       checksum (order-independent, verified on read)
@@ -13,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "dem/dem_system.hpp"
 #include "scene/scene.hpp"
 #include "solver/particles.hpp"
 #include "solver/solver.hpp"
@@ -30,6 +33,8 @@ struct CheckpointData {
   int dim = 0;
   Real dp = 0;
   Index total_fluid = 0, total_boundary = 0;
+  // Rigid grains (replicated on every rank): written as /dem when there are bodies.
+  dem::DemState dem;
 };
 
 // Makes sure MPI is initialised (sphdem's main does it through PETSc; tests may not).

@@ -21,7 +21,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 L = 0.146
 CFLS = [0.1, 0.2, 0.3, 0.5]
 DELTAS = [0.0, 0.05, 0.1]
-RES = [20, 40]  # dp = L / RES
+RES = [20, 30]  # dp = L / RES
 
 GUARDS = [("NaN or Inf", "nan"), ("density out of bounds", "density"),
           ("Mach number too high", "mach"), ("fluid inside a solid", "penetration"),

@@ -436,6 +436,39 @@ void DemSystem::step(Real dt) {
   time_ += dt;
 }
 
+DemState DemSystem::state() const {
+  DemState s;
+  s.time = time_;
+  s.bodies = bodies_;
+  s.acc_prev = acc_prev_;
+  s.alpha_prev = alpha_prev_;
+  for (const Wall& w : walls_) {
+    s.wall_point.push_back(w.point);
+    s.wall_offset.push_back(w.offset);
+  }
+  s.keys = hist_keys_;
+  s.springs = hist_springs_;
+  return s;
+}
+
+void DemSystem::restore(const DemState& s) {
+  if (s.bodies.size() != bodies_.size() || s.wall_point.size() != walls_.size() ||
+      s.acc_prev.size() != bodies_.size() || s.keys.size() != s.springs.size())
+    throw InputError("DEM state: " + std::to_string(s.bodies.size()) + " bodies and " +
+                     std::to_string(s.wall_point.size()) + " walls, the scene has " +
+                     std::to_string(bodies_.size()) + " and " + std::to_string(walls_.size()));
+  time_ = s.time;
+  bodies_ = s.bodies;
+  acc_prev_ = s.acc_prev;
+  alpha_prev_ = s.alpha_prev;
+  for (std::size_t i = 0; i < walls_.size(); ++i) {
+    walls_[i].point = s.wall_point[i];
+    walls_[i].offset = s.wall_offset[i];
+  }
+  hist_keys_ = s.keys;
+  hist_springs_ = s.springs;
+}
+
 Real DemSystem::time_step() const {
   Real dt = std::numeric_limits<Real>::max();
   for (const RigidBody& b : bodies_) {

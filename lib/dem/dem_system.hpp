@@ -86,6 +86,18 @@ struct Wall {
   Vec3 velocity;  // translation speed (a baffle lifted at a prescribed speed)
 };
 
+// Everything a bit-identical restart needs beyond what the scene rebuilds (templates, parameters,
+// walls' shapes): body states, the integrator's previous rates, moving-wall positions, the
+// tangential contact history (keyed by body ids and node) and the time.
+struct DemState {
+  Real time = 0;
+  std::vector<RigidBody> bodies;
+  std::vector<Vec3> acc_prev, alpha_prev;
+  std::vector<Vec3> wall_point, wall_offset;
+  std::vector<ContactKey> keys;
+  std::vector<Vec3> springs;
+};
+
 class DemSystem {
  public:
   explicit DemSystem(const DemParams& params = {});
@@ -129,6 +141,11 @@ class DemSystem {
   const std::vector<ContactKey>& history_keys() const { return hist_keys_; }
   const std::vector<Vec3>& history_springs() const { return hist_springs_; }
   Real kinetic_energy() const;
+
+  DemState state() const;
+  // Replaces the dynamic state with one taken from an identically built system. Throws
+  // InputError when the body or wall counts differ.
+  void restore(const DemState& s);
 
  private:
   struct PairOut;

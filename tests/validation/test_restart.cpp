@@ -220,3 +220,106 @@ TEST(Restart, SigtermWritesACheckpointAndStops) {
 
 }  // namespace
 }  // namespace sphdem
+
+namespace sphdem {
+namespace {
+
+// Three spheres on a rough plane pushed sideways by a tilted gravity, the first one sliding and
+// the third dropping onto the other two: the tangential springs are loaded at the checkpoint.
+dem::DemSystem grains_in_contact() {
+  dem::DemParams p;
+  p.gravity = Vec3(2.0, 0, -9.81);
+  p.grain_wall.kn = 1e6;
+  p.grain_wall.restitution = 0.5;
+  p.grain_wall.mu = 0.4;
+  p.grain_wall.poisson = 0.3;
+  p.grain_wall.tangential_damping = true;
+  p.grain_grain = p.grain_wall;
+  dem::DemSystem sys(p);
+  sys.add_plane_wall(Vec3(0, 0, 0), Vec3(0, 0, 1));
+  const Real r = 0.02;
+  const int s = sys.add_template(dem::GrainTemplate::sphere(r));
+  sys.add_body(s, 2500, Vec3(0, 0, r), Quat{}, Vec3(0.3, 0, 0));
+  sys.add_body(s, 2500, Vec3(2 * r, 0.001, r));
+  sys.add_body(s, 2500, Vec3(r, 0, r * Real(2.75)), Quat{}, Vec3(0, 0.05, 0));
+  return sys;
+}
+
+std::string body_state(const dem::DemSystem& sys) {
+  std::ostringstream os;
+  os << std::hexfloat;
+  for (const dem::RigidBody& b : sys.bodies())
+    os << b.id << ' ' << b.x.x << ' ' << b.x.y << ' ' << b.x.z << ' ' << b.v.x << ' ' << b.v.y
+       << ' ' << b.v.z << ' ' << b.q.w << ' ' << b.q.x << ' ' << b.q.y << ' ' << b.q.z << ' '
+       << b.w.x << ' ' << b.w.y << ' ' << b.w.z << '\n';
+  return os.str();
+}
+
+TEST(Restart, GrainsInContactContinueBitIdentically) {
+  const Real dt = 1e-5;  // below the contact limit t_c/50 = 1.29e-5 s
+  const int half = 2000;
+  dem::DemSystem straight = grains_in_contact();
+  for (int i = 0; i < 2 * half; ++i) straight.step(dt);
+
+  dem::DemSystem first = grains_in_contact();
+  for (int i = 0; i < half; ++i) first.step(dt);
+  ASSERT_GE(first.contact_count(), 2u) << "the grains must be in contact at the checkpoint";
+  double spring = 0;
+  for (const Vec3& s : first.history_springs()) spring = std::max(spring, double(norm(s)));
+  ASSERT_GT(spring, 0) << "the tangential springs must be loaded at the checkpoint";
+
+  CheckpointData cp;
+  cp.dim = 3;
+  cp.dp = Real(0.01);
+  cp.dem = first.state();
+  fs::create_directories("restart_dem");
+  const std::string path = "restart_dem/checkpoint.h5";
+  ASSERT_GT(write_checkpoint(path, cp), 0u);
+  const CheckpointData back = read_checkpoint(path);
+  dem::DemSystem resumed = grains_in_contact();
+  resumed.restore(back.dem);
+  EXPECT_EQ(resumed.time(), first.time());
+  for (int i = 0; i < half; ++i) resumed.step(dt);
+  EXPECT_EQ(body_state(resumed), body_state(straight));
+
+  // Control: the same restart without the contact history ends elsewhere.
+  dem::DemState no_history = back.dem;
+  no_history.keys.clear();
+  no_history.springs.clear();
+  dem::DemSystem forgetful = grains_in_contact();
+  forgetful.restore(no_history);
+  for (int i = 0; i < half; ++i) forgetful.step(dt);
+  EXPECT_NE(body_state(forgetful), body_state(straight));
+}
+
+TEST(Restart, CorruptedDemStateIsRefused) {
+  dem::DemSystem sys = grains_in_contact();
+  for (int i = 0; i < 200; ++i) sys.step(Real(1e-5));
+  CheckpointData cp;
+  cp.dim = 3;
+  cp.dp = Real(0.01);
+  cp.dem = sys.state();
+  fs::create_directories("restart_dem");
+  const std::string path = "restart_dem/corrupt.h5";
+  ASSERT_GT(write_checkpoint(path, cp), 0u);
+  // Change one body velocity in the file.
+  hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+  ASSERT_GE(f, 0);
+  hid_t ds = H5Dopen2(f, "dem/v", H5P_DEFAULT);
+  std::vector<double> v(9);
+  H5Dread(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data());
+  v[0] += 1e-3;
+  H5Dwrite(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data());
+  H5Dclose(ds);
+  H5Fclose(f);
+  try {
+    read_checkpoint(path);
+    FAIL() << "a corrupted DEM state was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("DEM state checksum mismatch"), std::string::npos)
+        << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace sphdem
