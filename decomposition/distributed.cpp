@@ -37,7 +37,10 @@ ParticleSet<Host> select(const ParticleSet<Host>& ps, const std::vector<std::uin
     for (std::size_t j = 0; j < slots.size(); ++j) v[j] = b[std::size_t(slots[j])];
   });
   out.n_fluid = nf;
-  out.n_wall = Index(slots.size()) - nf;
+  Index walls = 0;
+  for (Index i = wb; i < wb + ps.n_wall && i < n; ++i) walls += mine[std::size_t(i - wb)] ? 1 : 0;
+  out.n_wall = walls;
+  out.n_grain = Index(slots.size()) - nf - walls;
   return out;
 }
 

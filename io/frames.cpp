@@ -69,17 +69,23 @@ void FrameWriter::write(Real time, const ParticleSet<Host>& ps_const) {
   hid_t f = h5::create_file(path);
   if (f < 0) throw InputError("cannot create frame file '" + path + "'");
   h5::write_attr<double>(f, "time", H5T_NATIVE_DOUBLE, time);
-  Frame fr{time, name, 0, 0};
-  for (int g = 0; g < (params_.boundary ? 2 : 1); ++g) {
-    const Selection sel = g == 0 ? select(ps, 0, ps.n_fluid, params_, dim_)
-                                 : select(ps, ps.wall_begin(), ps.size(), params_, dim_);
+  Frame fr{time, name, 0, 0, 0};
+  Index grains = ps.n_grain, any_grains = 0;
+  MPI_Allreduce(&grains, &any_grains, 1, MPI_INT64_T, MPI_SUM, MPI_COMM_WORLD);
+  const int groups = params_.boundary ? (any_grains > 0 ? 3 : 2) : 1;
+  const Index grain_begin = ps.wall_begin() + ps.n_wall;
+  for (int g = 0; g < groups; ++g) {
+    const Selection sel = g == 0   ? select(ps, 0, ps.n_fluid, params_, dim_)
+                          : g == 1 ? select(ps, ps.wall_begin(), grain_begin, params_, dim_)
+                                   : select(ps, grain_begin, ps.size(), params_, dim_);
     Index local = Index(sel.slots.size()), total = 0, offset = 0;
     MPI_Allreduce(&local, &total, 1, MPI_INT64_T, MPI_SUM, MPI_COMM_WORLD);
     MPI_Exscan(&local, &offset, 1, MPI_INT64_T, MPI_SUM, MPI_COMM_WORLD);
     int rank = 0;
     MPI_Comm_rank(MPI_COMM_WORLD, &rank);
     if (rank == 0) offset = 0;
-    hid_t grp = H5Gcreate2(f, g == 0 ? "fluid" : "walls", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    static const char* const kGroups[] = {"fluid", "walls", "grains"};
+    hid_t grp = H5Gcreate2(f, kGroups[g], H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
     write_block_field(grp, "pos", gather(ps.pos, sel), total, offset, label);
     if (g == 0) {
       for (const std::string& fld : params_.fields) {
@@ -91,7 +97,8 @@ void FrameWriter::write(Real time, const ParticleSet<Host>& ps_const) {
     } else {
       write_block_field(grp, "press", gather(ps.press, sel), total, offset, label);
       write_block_field(grp, "body", gather(ps.body, sel), total, offset, label);
-      fr.n_wall = total;
+      if (g == 2) write_block_field(grp, "vel", gather(ps.vel, sel), total, offset, label);
+      (g == 1 ? fr.n_wall : fr.n_grain) = total;
     }
     H5Gclose(grp);
   }
@@ -111,16 +118,16 @@ void FrameWriter::adopt_existing(Real up_to_time) {
     if (!std::filesystem::exists(path)) break;
     hid_t f = h5::open_file_read(path);
     if (f < 0) break;
-    Frame fr{0, name, 0, 0};
+    Frame fr{0, name, 0, 0, 0};
     fr.time = h5::read_attr<double>(f, "time", H5T_NATIVE_DOUBLE, path);
-    for (int g = 0; g < 2; ++g) {
-      const char* gname = g == 0 ? "fluid" : "walls";
+    for (int g = 0; g < 3; ++g) {
+      const char* gname = g == 0 ? "fluid" : (g == 1 ? "walls" : "grains");
       if (H5Lexists(f, gname, H5P_DEFAULT) <= 0) continue;
       hid_t ds = H5Dopen2(f, (std::string(gname) + "/pos").c_str(), H5P_DEFAULT);
       hid_t sp = H5Dget_space(ds);
       hsize_t dims[2] = {0, 0};
       H5Sget_simple_extent_dims(sp, dims, nullptr);
-      (g == 0 ? fr.n_fluid : fr.n_wall) = Index(dims[0]);
+      (g == 0 ? fr.n_fluid : (g == 1 ? fr.n_wall : fr.n_grain)) = Index(dims[0]);
       H5Sclose(sp);
       H5Dclose(ds);
     }
@@ -146,10 +153,11 @@ void FrameWriter::write_index() const {
   for (const Frame& fr : frames_) {
     x << " <Grid GridType=\"Collection\" CollectionType=\"Spatial\">\n  <Time Value=\"" << fr.time
       << "\" />\n";
-    for (int g = 0; g < 2; ++g) {
-      const Index n = g == 0 ? fr.n_fluid : fr.n_wall;
-      if (g == 1 && !params_.boundary) continue;
-      const char* block = g == 0 ? "fluid" : "walls";
+    for (int g = 0; g < 3; ++g) {
+      const Index n = g == 0 ? fr.n_fluid : (g == 1 ? fr.n_wall : fr.n_grain);
+      if (g >= 1 && !params_.boundary) continue;
+      if (g == 2 && n == 0) continue;
+      const char* block = g == 0 ? "fluid" : (g == 1 ? "walls" : "grains");
       x << "  <Grid Name=\"" << block << "\" GridType=\"Uniform\">\n"
         << "   <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << n << "\" />\n"
         << "   <Geometry GeometryType=\"XYZ\">\n    <DataItem Dimensions=\"" << n
@@ -164,6 +172,7 @@ void FrameWriter::write_index() const {
       } else {
         attribute(fr, block, "press", n, 1, xdmf_number_type());
         attribute(fr, block, "body", n, 1, "Int\" Precision=\"4");
+        if (g == 2) attribute(fr, block, "vel", n, 3, xdmf_number_type());
       }
       x << "  </Grid>\n";
     }

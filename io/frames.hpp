@@ -1,6 +1,7 @@
 // ParaView frames: one parallel HDF5 file per frame (frame_NNNNN.h5) and one XDMF file
 // (frames.xdmf) that indexes them all as a time series with a "fluid" block and, optionally, a
-// "walls" block. Open frames.xdmf in ParaView (Xdmf3 reader) to see the run.
+// "walls" block and (when the run has grains) a "grains" block of grain boundary particles. Open
+// frames.xdmf in ParaView (Xdmf3 reader) to see the run.
 #pragma once
 
 #include <string>
@@ -24,7 +25,7 @@ class FrameWriter {
   struct Frame {
     Real time;
     std::string file;
-    Index n_fluid, n_wall;
+    Index n_fluid, n_wall, n_grain = 0;
   };
   void write_index() const;
 
