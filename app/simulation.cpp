@@ -89,7 +89,8 @@ std::unique_ptr<SolverBase> make_solver(const Scene& scene, Backend backend, std
                          ": domain.periodic: a periodic axis runs on one rank only "
                          "for now (this run has " +
                          std::to_string(nranks) + " ranks)");
-    auto ex = std::make_shared<MpiExchange>(MPI_COMM_WORLD, p.grid, procs, Real(2.02) * p.h,
+    auto ex = std::make_shared<MpiExchange>(MPI_COMM_WORLD, p.grid, procs,
+                                            (Real(2.02) + scene.parallel.skin) * p.h,
                                             scene.parallel.imbalance);
     keep_owned_fluid(*ex, ps);
     ex->rebalance(ps);  // boxes from the initial histogram (DMSwarm moves the fluid)
@@ -114,6 +115,18 @@ std::unique_ptr<SolverBase> make_solver(const Scene& scene, Backend backend, std
           << ex->last_imbalance() << "\n";
       if (exchange) *exchange = ex;
       return make_device_solver(scene, std::move(ps), c0, ex);
+    }
+    {
+      std::ostringstream cuts;
+      for (int k = 0; k < 3; ++k) {
+        const auto& st = ex->decomposition().cell_starts(k);
+        if (st.size() <= 2) continue;
+        cuts << " "
+             << "xyz"[k] << " cuts at";
+        for (std::size_t i = 1; i + 1 < st.size(); ++i)
+          cuts << " " << p.grid.lo[k] + Real(st[i]) * p.grid.cell[k];
+      }
+      log << "boxes:" << cuts.str() << " m\n";
     }
     log << "backend: host, " << host_thread_count() << " OpenMP threads per rank, " << nranks
         << " ranks as " << pr[0] << " x " << pr[1] << " x " << pr[2]
@@ -576,7 +589,8 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
   r.removed_mass = solver->removed_mass();
   r.particle_steps_per_second = r.wall_seconds > 0 ? particle_steps / r.wall_seconds : 0;
   if (ex)
-    log << "ranks: " << ex->size() << ", rebalanced " << ex->rebalance_count()
+    log << "ranks: " << ex->size() << ", halo rebuilt at " << solver->halo_rebuilds() << " of "
+        << r.steps << " steps, rebalanced " << ex->rebalance_count()
         << " times, owned-fluid imbalance at the last check " << ex->last_imbalance() << "\n";
   if (r.removed > 0)
     log << "removed (open ends): " << r.removed << " particles, " << r.removed_mass << " kg\n";

@@ -58,6 +58,7 @@
 //   parallel:                    # runs on many ranks (mpirun)
 //     rebalance_every: 100       # [0, 1e9] steps between imbalance checks (0 = only at the start)
 //     imbalance: 1.2             # [1, 100] max/mean owned fluid per rank that triggers a rebalance
+//     skin: 0.2                  # [0, 2] h; halo margin: the plan is rebuilt after a skin/2 move
 //   frames:                      # ParaView frames (HDF5 + one XDMF index)
 //     every: 0                   # [0, 1e6] simulated s; 0 = none
 //     fields: [vel, rho, press]  # from: vel, rho, press, acc, drho, mass, id
@@ -579,10 +580,10 @@ Scene Parser::parse(const YAML::Node& root) {
   Scene s;
   s.source = file_;  // also the base folder of mesh paths
   scene_ = &s;
-  MapReader top = map(Field{root, root.Mark(), ""},
-                      {"name", "dimension", "domain", "gravity", "fluid", "sph", "time", "guards",
-                       "checkpoint", "parallel", "frames", "insitu", "solids", "fluid_blocks",
-                       "diagnostics"});
+  MapReader top =
+      map(Field{root, root.Mark(), ""},
+          {"name", "dimension", "domain", "gravity", "fluid", "sph", "time", "guards", "checkpoint",
+           "parallel", "frames", "insitu", "solids", "fluid_blocks", "diagnostics"});
   s.name = name(top.require("name"));
   s.dim = dim_ = integer(top.require("dimension"), 2, 3);
   parse_domain(top.require("domain"));
@@ -711,9 +712,10 @@ void Parser::parse_checkpoint(const Field& f) {
 
 void Parser::parse_parallel(const Field& f) {
   ParallelParams& p = scene_->parallel;
-  MapReader m = map(f, {"rebalance_every", "imbalance"});
+  MapReader m = map(f, {"rebalance_every", "imbalance", "skin"});
   p.rebalance_every = m.integer("rebalance_every", 0, 1000000000, p.rebalance_every);
   p.imbalance = m.number("imbalance", closed(1, 100), p.imbalance);
+  p.skin = m.number("skin", closed(0, 2), p.skin);
 }
 
 void Parser::parse_frames(const Field& f) {

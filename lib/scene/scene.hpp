@@ -93,6 +93,8 @@ struct CheckpointParams {
 struct ParallelParams {
   int rebalance_every = 100;  // steps between imbalance checks; 0 = never after the start
   Real imbalance = 1.2;       // rebalance when max/mean owned fluid per rank exceeds this
+  Real skin = 0.2;            // halo margin, in h: the halo plan is reused until an owned
+                              // particle has moved skin/2 (0 = rebuild every step)
 };
 
 // ParaView frames: parallel HDF5 files indexed by one XDMF file.

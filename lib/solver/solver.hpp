@@ -58,6 +58,8 @@ class SolverBase {
   virtual double last_pair_count() = 0;
   // Many ranks: 1 for each wall slot of host_particles() this rank owns (empty on one rank).
   virtual std::vector<std::uint8_t> wall_mine() const = 0;
+  // Many ranks: steps that rebuilt the halo plan (the others reused it); 0 on one rank.
+  virtual std::int64_t halo_rebuilds() const = 0;
   // Restart support: the counters, and replacing the whole state (particles and counters).
   virtual SolverCounters counters() const = 0;
   virtual void restore(ParticleSet<Host> particles, const SolverCounters& c) = 0;

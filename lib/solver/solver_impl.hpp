@@ -63,22 +63,45 @@ class Solver final : public SolverBase {
     host_valid_ = false;
     StepStats st;
     auto t0 = clock::now();
-    drop_halo();
-    st.removed = remove_and_wrap();
-    if (ex_) {
+    if (!ex_) {
+      st.removed = remove_and_wrap();
+      sort_fluid();
+      times_.cell_list += std::chrono::duration<double>(clock::now() - t0).count();
+    } else if (need_rebuild()) {
+      // Neighbour rebuild: leavers move, boxes may be rebalanced, a new halo plan is built.
+      drop_halo();
+      st.removed = remove_and_wrap();
       bool rebalanced = false;
+      const Index walls_were_at = ps_.wall_begin();
       on_host([&](ParticleSet<Host>& h) {
         ex_->migrate(h);
         const int every = scene_.parallel.rebalance_every;
         rebalanced = every > 0 && step_ > 0 && step_ % every == 0 && ex_->rebalance(h);
       });
+      // Arrivals and departures moved the wall slots: the boundary list follows them.
+      shift_boundary(ps_.wall_begin() - walls_were_at);
       if (rebalanced) reselect_walls();
+      sort_fluid();
+      auto t1 = clock::now();
+      times_.cell_list += std::chrono::duration<double>(t1 - t0).count();
+      fill_halo();
+      record_build();
+      ++rebuilds_;
+      times_.halo += std::chrono::duration<double>(clock::now() - t1).count();
+    } else {
+      // Between rebuilds: owned particles stay owned, the halo copies are refreshed in place.
+      st.removed = remove_and_wrap();  // none: need_rebuild() saw none outside
+      sort_fluid();
+      follow(root_at_, fluid_cells_);
+      auto t1 = clock::now();
+      times_.cell_list += std::chrono::duration<double>(t1 - t0).count();
+      refresh_halo(ps_.pos, true);
+      refresh_halo(ps_.vel);
+      refresh_halo(ps_.rho);
+      sort_range(ps_.n_fluid, ps_.n_halo, halo_cells_);
+      follow(leaf_at_, halo_cells_);
+      times_.halo += std::chrono::duration<double>(clock::now() - t1).count();
     }
-    sort_fluid();
-    auto t1 = clock::now();
-    times_.cell_list += std::chrono::duration<double>(t1 - t0).count();
-    fill_halo();
-    times_.halo += std::chrono::duration<double>(clock::now() - t1).count();
 
     const bool symplectic = scene_.time.integrator == Integrator::kSymplectic;
     evaluate_rates();
@@ -151,12 +174,14 @@ class Solver final : public SolverBase {
       append_walls(particles, select_walls());
     }
     to_space(Space{}, std::move(particles), ps_);
+    built_ = false;  // the next step rebuilds the halo
     rate_.resize(std::size_t(ps_.size()));
     sort_boundary();
     if (ex_) mark_wall_owners();
   }
 
   std::vector<std::uint8_t> wall_mine() const override { return mine_host_; }
+  std::int64_t halo_rebuilds() const override { return rebuilds_; }
 
   double last_pair_count() override {
     ParticleView v = view();
@@ -434,7 +459,8 @@ class Solver final : public SolverBase {
     if constexpr (!std::is_same_v<Space, Host>) b.upload(tmp);
   }
 
-  // Sends the owned values of a field to the halo slots (in the halo's sorted order).
+  // Sends the owned values of a field to the halo slots. The plan's roots and leaves are in the
+  // order of the last rebuild; root_at_ and leaf_at_ map the current slots to them.
   template <class T>
   void refresh_halo(Buffer<T, Space>& field, bool positions = false) {
     if (!ex_) return;  // collective: every rank calls it, with or without halo slots
@@ -442,14 +468,62 @@ class Solver final : public SolverBase {
     const Index nf = ps_.n_fluid, nh = ps_.n_halo;
     std::vector<T> tmp;
     T* f = get_host<T>(field, tmp);
+    std::vector<T> roots(static_cast<std::size_t>(std::max<Index>(nf, 1)));
+    for (Index i = 0; i < nf; ++i) roots[root_at_[std::size_t(i)]] = f[i];
     std::vector<T> leaves(static_cast<std::size_t>(std::max<Index>(nh, 1)));
-    bcast_one(f, leaves.data(), positions);
-    std::vector<std::uint32_t> otmp;
-    const std::uint32_t* order =
-        nh > 0 ? get_host<std::uint32_t>(halo_cells_.order, otmp) : nullptr;
-    for (Index i = 0; i < nh; ++i) f[nf + i] = leaves[order[i]];
+    bcast_one(roots.data(), leaves.data(), positions);
+    for (Index j = 0; j < nh; ++j) f[nf + j] = leaves[leaf_at_[std::size_t(j)]];
     put_host<T>(field, tmp);
   }
+
+  // After a sort of the range a cell list covers: slot i now holds what slot order[i] held.
+  void follow(std::vector<std::uint32_t>& at, CellList<Space>& cl) {
+    std::vector<std::uint32_t> otmp;
+    const std::uint32_t* order = cl.count > 0 ? get_host<std::uint32_t>(cl.order, otmp) : nullptr;
+    std::vector<std::uint32_t> next(at.size());
+    for (std::size_t i = 0; i < at.size(); ++i) next[i] = at[order[i]];
+    at.swap(next);
+  }
+
+  // At a rebuild: the plan's roots are the owned slots as sorted now, its leaves the halo slots
+  // before their sort (halo_cells_.order), and the drift is measured from these positions.
+  void record_build() {
+    const Index nf = ps_.n_fluid, nh = ps_.n_halo;
+    root_at_.resize(std::size_t(nf));
+    std::iota(root_at_.begin(), root_at_.end(), std::uint32_t(0));
+    leaf_at_.resize(std::size_t(nh));
+    std::iota(leaf_at_.begin(), leaf_at_.end(), std::uint32_t(0));
+    follow(leaf_at_, halo_cells_);
+    std::vector<Vec3> tmp;
+    const Vec3* pos = get_host<Vec3>(ps_.pos, tmp);
+    pos_at_build_.assign(pos, pos + nf);
+    built_ = true;
+  }
+
+  // Whether this step needs a neighbour rebuild (collective): the first step, a rebalance check,
+  // a particle leaving the domain, or an owned particle that moved more than skin/2 since the
+  // last rebuild.
+  bool need_rebuild() {
+    const int every = scene_.parallel.rebalance_every;
+    int local = !built_ || (every > 0 && step_ > 0 && step_ % every == 0) ? 1 : 0;
+    const Index nf = ps_.n_fluid;
+    std::vector<Vec3> tmp;
+    const Vec3* pos = get_host<Vec3>(ps_.pos, tmp);
+    Real drift2 = 0;
+    for (Index i = 0; i < nf && !local; ++i) {
+      const Vec3 x = pos[i];
+      drift2 = std::max(drift2, norm2(x - pos_at_build_[root_at_[std::size_t(i)]]));
+      for (int k = 0; k < 3; ++k) {
+        if (p_.grid.periodic[k] || (p_.dim == 2 && k == 1)) continue;
+        if (!(x[k] >= p_.domain_lo[k] && x[k] <= p_.domain_hi[k])) local = 1;
+      }
+    }
+    const Real half = Real(0.5) * scene_.parallel.skin * p_.h;
+    Real m[2] = {Real(local), drift2};
+    ex_->max(m, 2);
+    return m[0] > 0 || m[1] > half * half;
+  }
+
   void bcast_one(Real* owned, Real* halo, bool) { ex_->bcast(owned, halo); }
   void bcast_one(Vec3* owned, Vec3* halo, bool positions) {
     if (positions) {
@@ -581,6 +655,10 @@ class Solver final : public SolverBase {
   std::shared_ptr<Exchange> ex_;
   CellList<Space> fluid_cells_, boundary_cells_, halo_cells_;
   Buffer<std::uint8_t, Space> wall_mine_;
+  std::vector<std::uint32_t> root_at_, leaf_at_;  // current owned/halo slot -> plan root/leaf
+  std::vector<Vec3> pos_at_build_;                // owned positions at the last rebuild, by root
+  bool built_ = false;
+  std::int64_t rebuilds_ = 0;
   std::vector<std::uint8_t> mine_host_;  // wall slots this rank owns (many ranks only)
   ParticleSet<Host> wall_store_;         // every wall particle, by id (many ranks only)
   Index global_fluid_ = 0;
