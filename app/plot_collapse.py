@@ -14,7 +14,8 @@ ColumnCollapse.* in the working directory (column_collapse_<tag>_final.csv).
 
 Chart: /usr/bin/python3 app/plot_collapse.py --chart STUDY.csv OUT.png
 STUDY.csv (docs/column_collapse_study.csv) has columns
-case,dp,m,mu_max,runout,height,failure_deg,t_stop,t_rest,steps,wall_s; the chart is run-out and
+case,dp,m,mu_max,k,slip,overrides,runout,height,failure_deg,t_stop,t_rest,ke_end,steps,wall_s;
+the chart is run-out and
 H/H0 against steps, with the reference values.
 """
 import csv

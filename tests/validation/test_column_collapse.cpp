@@ -1,7 +1,8 @@
-// 2D granular column collapse (Bui et al. 2008 set-up) with HBP + Mohr-Coulomb: the heap comes
-// to rest, and its run-out, height and failure line are compared with the scaling laws and the
-// Rankine angle. Writes column_collapse_final.csv (x0, z0, x, z, displacement per particle) for
-// app/plot_collapse.py, and column_collapse_history.csv (t, KE/(m g H0), front, back height).
+// 2D granular column collapse (Bui et al. 2008 set-up) with HBP + Mohr-Coulomb: run-out, height
+// and failure line against the scaling laws and the Rankine angle, the end of the collapse and
+// the time to rest. Writes <prefix>_final.csv (x0, z0, x, z, final displacement, displacement at
+// the end of the collapse per particle) for app/plot_collapse.py, and <prefix>_history.csv
+// (t, KE/(m g H0), front, height at the wall every 5 ms).
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -167,21 +168,26 @@ std::vector<std::string> split(const char* s) {
   return out;
 }
 
-// Disabled: with the seed's Papanastasiou m = 0.15 s the regularised Mohr-Coulomb material does
-// not hold a static heap; it creeps at a shear rate ~ 1/m, so the run-out is twice the Lube law
-// and the top corner slumps (docs/VALIDATION.md has the measured numbers). A rigid heap needs
-// m mu-levels ~1e5 Pa s, whose explicit viscous time step is ~1e-7 s. Kept as the study:
-//   build/tests/validation_tests --gtest_also_run_disabled_tests --gtest_filter='ColumnCollapse*'
+// Disabled: no setting measured reaches the references (docs/VALIDATION.md, "Granular column
+// collapse"). The seed's m = 0.15 s never comes to rest (run-out 1.21, H/H0 0.58). This runs the
+// closest setting at rest, m = 100 s with mu_max = 3000 Pa s at dp = 5 mm (100,573 steps): it
+// holds the height (H/H0 0.94) but runs out 0.80 and its unmoved region's edge fits 32 deg, so
+// it fails the run-out and failure-line checks. The tolerances are what a passing model must
+// meet, not fitted to these runs:
+//   build/tests/validation_tests --gtest_also_run_disabled_tests
+//     --gtest_filter='ColumnCollapse.DISABLED_HeapAgainstScalingLawsAndRankine'
 TEST(ColumnCollapse, DISABLED_HeapAgainstScalingLawsAndRankine) {
-  const Collapse c = run_collapse({"sph.dp=0.005"}, "column_collapse");
+  const Collapse c = run_collapse(
+      {"sph.dp=0.005", "fluid.rheology.m=100", "fluid.rheology.mu_max=3000"}, "column_collapse");
   EXPECT_LT(c.kinetic_ratio, kRestRatio);  // at rest
   const double a = 0.5;
-  // Lube et al. 2005: (L - L0)/L0 = 1.2 a = 0.6.
+  // Lube et al. 2005: (L - L0)/L0 = 1.2 a = 0.6, within 20% (the scatter of the fit).
   EXPECT_NEAR((c.runout - kL0) / kL0, 1.2 * a, 0.2 * 1.2 * a);
   // Nguyen et al. 2015 (aluminium rods, a <= 0.65): the top of the column stays, H/H0 = 1.
   EXPECT_NEAR(c.height / kH0, 1.0, 0.1);
-  // Rankine active failure line 45 + phi/2 = 54.9 deg.
-  EXPECT_NEAR(c.failure_deg, 54.9, 10.0);
+  // Rankine active failure line 45 + phi/2 = 54.9 deg; +-5 deg: a line fitted to row edges
+  // quantised to dp = 5 mm over 80 mm of height has a slope error of ~3.6 deg at 55 deg.
+  EXPECT_NEAR(c.failure_deg, 54.9, 5.0);
 }
 
 // One point of the measured chart: the scene with the overrides in SPHDEM_COLLAPSE_SET
