@@ -172,7 +172,8 @@ std::vector<std::string> split(const char* s) {
 // collapse"). The seed's m = 0.15 s never comes to rest (run-out 1.21, H/H0 0.58). This runs the
 // closest setting at rest, m = 100 s with mu_max = 3000 Pa s at dp = 5 mm (100,573 steps): it
 // holds the height (H/H0 0.94) but runs out 0.80 and its unmoved region's edge fits 32 deg, so
-// it fails the run-out and failure-line checks. The tolerances are what a passing model must
+// it fails the run-out and failure-line checks (a fitted K = 10 Pa s with mu_max = 1000 meets
+// run-out and height, not the failure line). The tolerances are what a passing model must
 // meet, not fitted to these runs:
 //   build/tests/validation_tests --gtest_also_run_disabled_tests
 //     --gtest_filter='ColumnCollapse.DISABLED_HeapAgainstScalingLawsAndRankine'
