@@ -137,7 +137,7 @@ def chart(study, out):
                 ax.annotate(r["case"], (float(r["steps"]), float(r[key])), fontsize=6,
                             xytext=(3, 3), textcoords="offset points")
         ax.set_xscale("log")
-        ax.set_xlabel("steps to t = 0.8 s (o: dp 5 mm, square: dp 2.5 mm)")
+        ax.set_xlabel("steps to the end of the run (o: dp 5 mm, square: dp 2.5 mm)")
         ax.set_ylabel(name)
         ax.legend(fontsize=7)
     axes[0].set_title("run-out; reference Lube et al. 2005", fontsize=9)
