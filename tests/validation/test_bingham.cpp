@@ -131,8 +131,9 @@ TEST(Bingham, PlanePoiseuilleMatchesExact) {
 TEST(Bingham, HerschelBulkleyMatchesExact) {
   // n = 0.8, K = 0.15 Pa s^0.8, tau0 = 0.2 Pa: y0 = 1.23 mm.
   const Exact ex{163, 0.2, 0.15, 0.8, 0.005};
-  const Result r = run_channel(
-      {"fluid.rheology.n=0.8", "fluid.rheology.k=0.15", "fluid.rheology.cohesion=0.2"}, ex);
+  const Result r =
+      run_channel({"fluid.rheology.n=0.8", "fluid.rheology.k=0.15", "fluid.rheology.cohesion=0.2"},
+                  ex, "hb_profile.csv");
   EXPECT_LT(r.l2, 0.05);
   EXPECT_NEAR(r.plug_half, r.plug_exact, 0.10 * r.plug_exact);
   EXPECT_NEAR(r.flow, r.flow_exact, 0.03 * r.flow_exact);
@@ -142,8 +143,21 @@ TEST(Bingham, WithoutTheYieldTermTheComparisonFails) {
   // Same channel with the yield term removed: a Newtonian fluid of viscosity K flows faster and
   // has no plug, so the Bingham comparison must fail.
   const Exact ex{163, 0.245, 0.1, 1, 0.005};
-  const Result r = run_channel({"fluid.rheology.yield=false"}, ex);
+  const Result r = run_channel({"fluid.rheology.yield=false"}, ex, "bingham_noyield_profile.csv");
   EXPECT_GT(r.l2, 0.05);
+  EXPECT_GT(std::abs(r.plug_half - r.plug_exact), 0.10 * r.plug_exact);
+  EXPECT_GT(std::abs(r.flow - r.flow_exact), 0.03 * r.flow_exact);
+}
+
+TEST(Bingham, HerschelBulkleyWithZeroYieldStressFails) {
+  // The Herschel-Bulkley channel with tau0 = 0 (a power-law fluid, n = 0.8): no plug, faster
+  // flow, so the Herschel-Bulkley comparison must fail.
+  const Exact ex{163, 0.2, 0.15, 0.8, 0.005};
+  const Result r =
+      run_channel({"fluid.rheology.n=0.8", "fluid.rheology.k=0.15", "fluid.rheology.cohesion=0"},
+                  ex, "hb_noyield_profile.csv");
+  EXPECT_GT(r.l2, 0.05);
+  EXPECT_GT(std::abs(r.plug_half - r.plug_exact), 0.10 * r.plug_exact);
   EXPECT_GT(std::abs(r.flow - r.flow_exact), 0.03 * r.flow_exact);
 }
 

@@ -1,14 +1,19 @@
-// 2D granular column collapse (Bui et al. 2008 set-up) with HBP + Mohr-Coulomb: the heap comes
-// to rest, and its run-out, height and failure line are compared with the scaling laws and the
-// Rankine angle. Writes column_collapse_final.csv (x0, z0, x, z, displacement per particle) for
-// app/plot_collapse.py.
+// 2D granular column collapse (Bui et al. 2008 set-up) with HBP + Mohr-Coulomb: run-out, height
+// and failure line against the scaling laws and the Rankine angle, the end of the collapse and
+// the time to rest. Writes <prefix>_final.csv (x0, z0, x, z, final displacement, displacement at
+// the end of the collapse per particle) for app/plot_collapse.py, and <prefix>_history.csv
+// (t, KE/(m g H0), front, height at the wall every 5 ms).
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <sstream>
+#include <string>
 #include <vector>
 
 #include "app/simulation.hpp"
@@ -19,12 +24,37 @@
 namespace sphdem {
 namespace {
 
+constexpr double kH0 = 0.1, kL0 = 0.2;
+// At rest: kinetic energy below 1e-4 m g H0, i.e. an RMS speed under 1.4 cm/s (1.4% of
+// sqrt(g H0)). The time to rest is the last time the heap was above it.
+constexpr double kRestRatio = 1e-4;
+// Moved / unmoved: 2.5 mm (H0/40), the same at every resolution.
+constexpr double kMoved = 0.0025;
+// End of the collapse: kinetic energy back below 1e-3 m g H0 after its peak. The failure line is
+// measured on the displacements at that time, before any later creep of the heap moves the
+// whole deposit.
+constexpr double kStopRatio = 1e-3;
+
 struct Collapse {
   double runout = 0, height = 0, failure_deg = 0, kinetic_ratio = 0;
+  double t_rest = std::numeric_limits<double>::quiet_NaN();  // NaN: not at rest at the end
+  double t_stop = std::numeric_limits<double>::quiet_NaN();  // NaN: still collapsing at the end
   std::int64_t steps = 0;
+  double wall = 0;
+  double dp = 0;
 };
 
-Collapse run_collapse(const std::vector<std::string>& ov, const std::string& csv) {
+double kinetic_ratio(const ParticleSet<Host>& ps) {
+  double ke = 0, mass = 0;
+  for (Index i = 0; i < ps.n_fluid; ++i) {
+    ke += 0.5 * ps.mass[i] * norm2(ps.vel[i]);
+    mass += ps.mass[i];
+  }
+  return ke / (mass * 9.81 * kH0);
+}
+
+Collapse run_collapse(const std::vector<std::string>& ov, const std::string& prefix) {
+  const auto t0 = std::chrono::steady_clock::now();
   const Scene scene =
       load_scene(std::string(SPHDEM_SOURCE_DIR) + "/inputs/column_collapse_2d.yaml", ov);
   std::ostringstream log;
@@ -35,21 +65,35 @@ Collapse run_collapse(const std::vector<std::string>& ov, const std::string& csv
     for (Index i = 0; i < ps.n_fluid; ++i) start[ps.id[i]] = ps.pos[i];
   }
   Collapse c;
+  c.dp = scene.sph.dp;
+  std::ofstream hist(prefix + "_history.csv");
+  hist << "t,kinetic_ratio,front,back_height\n";
+  double next_sample = 0, last_moving = 0, ke_peak = 0;
+  std::map<GlobalId, double> stop_disp;  // displacement at the end of the collapse
   while (solver->time() < scene.time.end) {
     const StepStats st = solver->step();
     check_step_guards(scene, solver->params(), st, solver->time(), solver->step_count());
     ++c.steps;
+    if (solver->time() >= next_sample) {
+      next_sample += 0.005;
+      const auto& ps = solver->host_particles();
+      const double ke = kinetic_ratio(ps);
+      if (ke > kRestRatio) last_moving = solver->time();
+      ke_peak = std::max(ke_peak, ke);
+      if (stop_disp.empty() && ke_peak > 10 * kStopRatio && ke < kStopRatio) {
+        c.t_stop = solver->time();
+        for (Index i = 0; i < ps.n_fluid; ++i)
+          stop_disp[ps.id[i]] = norm(ps.pos[i] - start.at(ps.id[i]));
+      }
+      hist << solver->time() << ',' << ke << ',' << probe_front(ps, Vec3(0, 0, 0), Vec3(1, 0, 0))
+           << ',' << probe_surface_height(ps, solver->params(), 0.5 * c.dp, 0) << '\n';
+    }
   }
   const auto& ps = solver->host_particles();
   const StepParams& p = solver->params();
-  const double dp = scene.sph.dp, H0 = 0.1, L0 = 0.2;
-  // At rest: kinetic energy against the potential energy released scale m g H0.
-  double ke = 0, mass = 0;
-  for (Index i = 0; i < ps.n_fluid; ++i) {
-    ke += 0.5 * ps.mass[i] * norm2(ps.vel[i]);
-    mass += ps.mass[i];
-  }
-  c.kinetic_ratio = ke / (mass * 9.81 * H0);
+  const double dp = scene.sph.dp;
+  c.kinetic_ratio = kinetic_ratio(ps);
+  if (c.kinetic_ratio < kRestRatio) c.t_rest = last_moving;
   // Run-out: where the free surface (kernel-sum height) falls below dp/2 along the floor.
   for (double x = 0.005; x < 0.6; x += dp / 4) {
     const double h = probe_surface_height(ps, p, x, 0);
@@ -57,58 +101,109 @@ Collapse run_collapse(const std::vector<std::string>& ov, const std::string& csv
     c.runout = x;
   }
   c.height = probe_surface_height(ps, p, 0.5 * dp, 0);
-  // Failure line: in each initial row, the static particles (moved less than dp/2) that reach
-  // out from the wall; a line fitted to the rows' outermost static x0 gives the angle.
-  std::map<long, double> edge;  // row -> largest x0 of a static particle
-  std::ofstream f(csv);
-  f << "x0,z0,x,z,displacement\n";
+  // Failure line: at the end of the collapse (or at the end of the run if it never stopped),
+  // in each initial row, the unmoved particles (displacement under kMoved) that
+  // reach out from the wall without a moved one between; a line fitted to the rows' outermost
+  // unmoved x0 gives the angle. Rows with fewer than two unmoved particles at the wall have no
+  // wedge; if more than half the rows between 0.1 H0 and 0.9 H0 have none, there is no unmoved
+  // wedge and the angle is NaN.
+  std::map<long, std::map<double, double>> rows;  // row -> x0 -> displacement
+  std::ofstream f(prefix + "_final.csv");
+  f << "x0,z0,x,z,displacement,displacement_at_stop\n";
   for (Index i = 0; i < ps.n_fluid; ++i) {
     const Vec3 x0 = start.at(ps.id[i]);
-    const double d = norm(ps.pos[i] - x0);
-    f << x0.x << ',' << x0.z << ',' << ps.pos[i].x << ',' << ps.pos[i].z << ',' << d << '\n';
-    const long row = std::lround(x0.z / dp - 0.5);
-    if (d < 0.5 * dp) edge[row] = std::max(edge.count(row) ? edge[row] : 0.0, x0.x);
+    const double d_end = norm(ps.pos[i] - x0);
+    const double d = stop_disp.empty() ? d_end : stop_disp.at(ps.id[i]);
+    f << x0.x << ',' << x0.z << ',' << ps.pos[i].x << ',' << ps.pos[i].z << ',' << d_end << ',' << d
+      << '\n';
+    rows[std::lround(x0.z / dp - 0.5)][x0.x] = d;
   }
   std::vector<double> zs, xs;
-  for (const auto& [row, x] : edge) {
+  int rows_in_range = 0;
+  for (const auto& [row, line] : rows) {
     const double z = (row + 0.5) * dp;
-    if (z < 0.1 * H0 || z > 0.9 * H0) continue;  // skip the floor layer and the top corner
+    if (z < 0.1 * kH0 || z > 0.9 * kH0) continue;  // skip the floor layer and the top corner
+    ++rows_in_range;
+    double edge = -1;
+    int count = 0;
+    for (const auto& [x0, d] : line) {
+      if (d >= kMoved) break;
+      edge = x0;
+      ++count;
+    }
+    if (count < 2) continue;
     zs.push_back(z);
-    xs.push_back(x);
+    xs.push_back(edge);
   }
-  double sz = 0, sx = 0, szz = 0, szx = 0;
-  for (std::size_t k = 0; k < zs.size(); ++k) {
-    sz += zs[k];
-    sx += xs[k];
-    szz += zs[k] * zs[k];
-    szx += zs[k] * xs[k];
+  c.failure_deg = std::numeric_limits<double>::quiet_NaN();  // no unmoved wedge
+  if (2 * zs.size() > std::size_t(rows_in_range)) {
+    double sz = 0, sx = 0, szz = 0, szx = 0;
+    for (std::size_t k = 0; k < zs.size(); ++k) {
+      sz += zs[k];
+      sx += xs[k];
+      szz += zs[k] * zs[k];
+      szx += zs[k] * xs[k];
+    }
+    const double n = double(zs.size());
+    const double dxdz = (n * szx - sz * sx) / (n * szz - sz * sz);
+    c.failure_deg = std::atan2(1.0, -dxdz) * 180 / kPi;
   }
-  const double n = double(zs.size());
-  const double dxdz = (n * szx - sz * sx) / (n * szz - sz * sz);
-  c.failure_deg = std::atan2(1.0, -dxdz) * 180 / kPi;
+  c.wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::printf(
-      "column collapse dp=%.4f: %lld steps, run-out %.3f m ((L-L0)/L0 = %.2f), height "
-      "%.4f m (H/H0 = %.2f), failure line %.1f deg, KE/(m g H0) = %.2e\n",
-      dp, static_cast<long long>(c.steps), c.runout, (c.runout - L0) / L0, c.height, c.height / H0,
-      c.failure_deg, c.kinetic_ratio);
+      "column collapse dp=%.4f: %lld steps, %.0f s wall, run-out %.3f m ((L-L0)/L0 = %.2f), "
+      "height %.4f m (H/H0 = %.2f), failure line %.1f deg, KE/(m g H0) = %.2e, collapse ends %.2f "
+      "s, "
+      "rest at %.2f s\n",
+      dp, static_cast<long long>(c.steps), c.wall, c.runout, (c.runout - kL0) / kL0, c.height,
+      c.height / kH0, c.failure_deg, c.kinetic_ratio, c.t_stop, c.t_rest);
   return c;
 }
 
-// Disabled: with the seed's Papanastasiou m = 0.15 s the regularised Mohr-Coulomb material does
-// not hold a static heap; it creeps at a shear rate ~ 1/m, so the run-out is twice the Lube law
-// and the top corner slumps (docs/VALIDATION.md has the measured numbers). A rigid heap needs
-// m mu-levels ~1e5 Pa s, whose explicit viscous time step is ~1e-7 s. Kept as the study:
-//   build/tests/validation_tests --gtest_also_run_disabled_tests --gtest_filter='ColumnCollapse*'
+std::vector<std::string> split(const char* s) {
+  std::vector<std::string> out;
+  if (!s) return out;
+  std::string item;
+  for (std::istringstream in(s); std::getline(in, item, ';');)
+    if (!item.empty()) out.push_back(item);
+  return out;
+}
+
+// Disabled: no setting measured reaches the references (docs/VALIDATION.md, "Granular column
+// collapse"). The seed's m = 0.15 s never comes to rest (run-out 1.21, H/H0 0.58). This runs the
+// closest setting at rest, m = 100 s with mu_max = 3000 Pa s at dp = 5 mm (100,573 steps): it
+// holds the height (H/H0 0.94) but runs out 0.80 and its unmoved region's edge fits 32 deg, so
+// it fails the run-out and failure-line checks (a fitted K = 10 Pa s with mu_max = 1000 meets
+// run-out and height, not the failure line). The tolerances are what a passing model must
+// meet, not fitted to these runs:
+//   build/tests/validation_tests --gtest_also_run_disabled_tests
+//     --gtest_filter='ColumnCollapse.DISABLED_HeapAgainstScalingLawsAndRankine'
 TEST(ColumnCollapse, DISABLED_HeapAgainstScalingLawsAndRankine) {
-  const Collapse c = run_collapse({"sph.dp=0.005"}, "column_collapse_final.csv");
-  EXPECT_LT(c.kinetic_ratio, 1e-3);  // at rest
-  const double L0 = 0.2, a = 0.5;
-  // Lube et al. 2005: (L - L0)/L0 = 1.2 a = 0.6.
-  EXPECT_NEAR((c.runout - L0) / L0, 1.2 * a, 0.3 * 1.2 * a);
+  const Collapse c = run_collapse(
+      {"sph.dp=0.005", "fluid.rheology.m=100", "fluid.rheology.mu_max=3000"}, "column_collapse");
+  EXPECT_LT(c.kinetic_ratio, kRestRatio);  // at rest
+  const double a = 0.5;
+  // Lube et al. 2005: (L - L0)/L0 = 1.2 a = 0.6, within 20% (the scatter of the fit).
+  EXPECT_NEAR((c.runout - kL0) / kL0, 1.2 * a, 0.2 * 1.2 * a);
   // Nguyen et al. 2015 (aluminium rods, a <= 0.65): the top of the column stays, H/H0 = 1.
-  EXPECT_NEAR(c.height / 0.1, 1.0, 0.1);
-  // Rankine active failure line 45 + phi/2 = 54.9 deg.
-  EXPECT_NEAR(c.failure_deg, 54.9, 10.0);
+  EXPECT_NEAR(c.height / kH0, 1.0, 0.1);
+  // Rankine active failure line 45 + phi/2 = 54.9 deg; +-5 deg: a line fitted to row edges
+  // quantised to dp = 5 mm over 80 mm of height has a slope error of ~3.6 deg at 55 deg.
+  EXPECT_NEAR(c.failure_deg, 54.9, 5.0);
+}
+
+// One point of the measured chart: the scene with the overrides in SPHDEM_COLLAPSE_SET
+// (';'-separated key=value), appended to column_collapse_study.csv. E.g.
+//   SPHDEM_COLLAPSE_SET='sph.dp=0.005;fluid.rheology.m=100' build/tests/validation_tests
+//     --gtest_also_run_disabled_tests --gtest_filter='ColumnCollapse.DISABLED_Study'
+TEST(ColumnCollapse, DISABLED_Study) {
+  const char* set = std::getenv("SPHDEM_COLLAPSE_SET");
+  const char* tag = std::getenv("SPHDEM_COLLAPSE_TAG");
+  const std::string prefix = std::string("column_collapse_") + (tag ? tag : "study");
+  const Collapse c = run_collapse(split(set), prefix);
+  std::ofstream f("column_collapse_study.csv", std::ios::app);
+  f << '"' << (set ? set : "") << "\"," << c.dp << ',' << (c.runout - kL0) / kL0 << ','
+    << c.height / kH0 << ',' << c.failure_deg << ',' << c.kinetic_ratio << ',' << c.t_stop << ','
+    << c.t_rest << ',' << c.steps << ',' << c.wall << std::endl;
 }
 
 }  // namespace
