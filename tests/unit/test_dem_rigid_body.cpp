@@ -28,9 +28,9 @@ SpinResult spin(int axis) {
   SpinResult r;
   for (int k = 0; k < 10000; ++k) {
     integrate_body(b, Vec3(), Vec3(), Vec3(), 1e-3);
-    r.e_err = std::max(r.e_err, std::fabs(kinetic_energy(b) - e0) / e0);
-    r.l_err = std::max(r.l_err, norm(angular_momentum(b) - l0) / norm(l0));
-    r.q_err = std::max(r.q_err, std::fabs(norm(b.q) - 1.0));
+    r.e_err = std::max(r.e_err, double(std::fabs(kinetic_energy(b) - e0) / e0));
+    r.l_err = std::max(r.l_err, double(norm(angular_momentum(b) - l0) / norm(l0)));
+    r.q_err = std::max(r.q_err, double(std::fabs(norm(b.q) - Real(1))));
     for (int d = 0; d < 3; ++d) r.w_min[d] = std::min(r.w_min[d], double(b.w[d]));
   }
   return r;
