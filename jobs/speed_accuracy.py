@@ -100,11 +100,31 @@ def pareto(rows):
     return front
 
 
-def plot(rows, path):
+def self_error(out_root, row):
+    """rms relative difference of the front from the finest baseline run (baseline L/40), over
+    1 <= T <= 3: the discretisation and method error, free of the experiment's gate lift."""
+    ref = read_series(os.path.join(out_root, "baseline_L40", "front.csv"))
+    run = read_series(os.path.join(out_root, f"{row['label'].replace(' ', '_')}_L{row['res']}",
+                                   "front.csv"))
+    rt, rx = [r[0] for r in ref], [r[1] for r in ref]
+
+    def at(t):  # the reference front, linearly interpolated in time
+        for i in range(1, len(rt)):
+            if t <= rt[i]:
+                return rx[i - 1] + (rx[i] - rx[i - 1]) * (t - rt[i - 1]) / (rt[i] - rt[i - 1])
+        return rx[-1]
+
+    scale = math.sqrt(2 * G / L)
+    errs = [(x - at(t)) / at(t) for t, x in run if 1 <= t * scale <= 3]
+    return math.sqrt(sum(e * e for e in errs) / len(errs)) if len(errs) > 20 else float("nan")
+
+
+def plot(rows, path, out_root):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    fig, ax = plt.subplots(figsize=(7, 5))
+    import matplotlib.ticker
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(13, 5))
     markers = dict(zip([v[0] for v in VARIANTS], "osD^vx"))
     for label, _, _ in VARIANTS:
         pts = [r for r in rows if r["label"] == label and r["status"] == "completed"]
@@ -122,8 +142,28 @@ def plot(rows, path):
     ax.set_yscale("log")
     ax.set_xlabel("wall time, s (1 thread, to T = 3)")
     ax.set_ylabel("front rms error vs Koshizuka & Oka, %")
-    ax.set_title("2D dam break: error against wall time")
+    ax.yaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+    ax.set_title("against the experiment (Koshizuka & Oka)")
     ax.legend(fontsize=8)
+    # Right: against the finest baseline run (L/40), the runs coarser or different from it.
+    for label, _, _ in VARIANTS:
+        pts = [r for r in rows if r["label"] == label and r["status"] == "completed"
+               and not (label == "baseline" and int(r["res"]) == 40)]
+        pts = [(float(r["wall"]), 100 * self_error(out_root, r), r) for r in pts]
+        pts = [p for p in pts if not math.isnan(p[1]) and p[1] > 0]
+        if not pts:
+            continue
+        bx.plot([p[0] for p in pts], [p[1] for p in pts], markers[label], label=label,
+                linestyle="-" if label == "baseline" else "none")
+        for w, e, r in pts:
+            bx.annotate(f"L/{r['res']}", (w, e), fontsize=7, xytext=(3, 3), textcoords="offset points")
+    bx.set_xscale("log")
+    bx.set_yscale("log")
+    bx.set_xlabel("wall time, s (1 thread, to T = 3)")
+    bx.set_ylabel("front rms difference from the baseline L/40 run, %")
+    bx.set_title("against the finest run (discretisation and method error)")
+    bx.legend(fontsize=8)
+    fig.suptitle("2D dam break: error against wall time")
     fig.tight_layout()
     fig.savefig(path, dpi=120)
 
@@ -145,9 +185,13 @@ def main():
         with open(table) as f:
             rows = list(csv.DictReader(f))
     if args.plot:
-        plot(rows, args.plot)
+        plot(rows, args.plot, args.out)
         for r in pareto(rows):
             print(f"Pareto: {r['label']} L/{r['res']}: {100 * float(r['rms_error']):.1f}% in {float(r['wall']):.1f} s")
+        for r in rows:
+            if r["status"] == "completed":
+                print(f"{r['label']} L/{r['res']}: vs experiment {100 * float(r['rms_error']):.2f}%, vs L/40 "
+                      f"{100 * self_error(args.out, r):.2f}%, {float(r['wall']):.1f} s")
         return 0
     done = {(r["label"], int(r["res"])) for r in rows}
     for label, change, resolutions in VARIANTS:
