@@ -2,8 +2,8 @@
 # PBS job: runs one sphdem scene on NRANKS MPI ranks and continues from the newest checkpoint
 # when resubmitted (on any rank count).
 #   qsub -v SCENE=inputs/dam_break_3d.yaml,OUT=out/dam_break_3d,NRANKS=4 jobs/pbs_run.sh
-# Resources: one chunk per rank (edit select= to match NRANKS); multi-rank runs use the CPU
-# backend on every rank, a single-rank run uses its GPU (see jobs/slurm_run.sh). PBS sends
+# Resources: one chunk per rank (edit select= to match NRANKS; add ngpus=1 per chunk for one GPU
+# per rank, see jobs/slurm_run.sh). PBS sends
 # SIGTERM before killing a job at its walltime; sphdem then writes a checkpoint and exits with
 # status 4: resubmit the same command to continue (--restart latest is added automatically).
 # Outputs: as jobs/slurm_run.sh.

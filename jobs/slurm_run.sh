@@ -5,9 +5,9 @@
 #   sbatch --ntasks=1 --gpus-per-task=1 jobs/slurm_run.sh inputs/dam_break_3d.yaml out/db3d_gpu
 # Resources: --ntasks ranks, each with --cpus-per-task OpenMP threads. The domain is split into
 # one box per rank (PETSc DMDA; --procs below fixes the process grid, default: PETSc chooses).
-# A single-rank job uses the GPU it is given (one GPU per task); multi-rank runs use the CPU
-# backend on every rank for now (the halo is exchanged from host memory; GPU ranks are future
-# work), so drop --gpus-per-task for them.
+# With --gpus-per-task=1 every rank uses its own GPU (node-local rank modulo the node's GPUs;
+# the halo is staged through host memory; this path is compiled but was never run on a GPU);
+# without GPUs every rank runs on its CPU cores.
 # Outputs: OUT/run.log, OUT/summary.json, OUT/*.csv, OUT/checkpoint_*.h5, OUT/frames.xdmf.
 # Time limit: Slurm sends SIGTERM --signal seconds before the end (below: 300 s); sphdem writes a
 # checkpoint on every rank and exits with status 4, and the script requeues itself, so the next
