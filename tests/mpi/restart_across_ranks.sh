@@ -2,13 +2,14 @@
 # Restart on a different rank count (issues #7, #8): 400 steps on one rank, against 200 steps on
 # 2 ranks + checkpoint + 200 steps on 3 ranks from it (DMSwarm redistribution). The energy and
 # front series (10 significant digits) must be identical row by row (the first part's closing
-# row at step 200 aside).
+# row at step 200 aside), and the frames index lists the same blocks and point counts.
 #   restart_across_ranks.sh SPHDEM_BINARY SCENE WORKDIR
 set -euo pipefail
 bin=$1; scene=$2; work=$3
 rm -rf "$work"; mkdir -p "$work"
 export OMP_NUM_THREADS=1 OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
-set_args=(--set sph.dp=0.03 --set diagnostics.every=0.001 --set checkpoint.every_steps=200 --quiet)
+set_args=(--set sph.dp=0.03 --set diagnostics.every=0.001 --set checkpoint.every_steps=200
+          --set frames.every=0.01 --quiet)
 "$bin" run "$scene" --out "$work/one" "${set_args[@]}" --max-steps 400
 mpirun --oversubscribe -n 2 "$bin" run "$scene" --out "$work/many" "${set_args[@]}" --max-steps 200
 ls "$work/many"/checkpoint_0000000200.h5 >/dev/null
@@ -30,4 +31,10 @@ for f in energy.csv front.csv; do
   rows=$(wc -l < "$work/one/$f")
   [ "$rows" -gt 40 ] || { echo "FAIL: $f has only $rows rows"; exit 1; }
 done
-echo "restart across ranks: energy.csv and front.csv identical ($rows rows)"
+# Frames written by 2 and then 3 ranks list every fluid and wall particle once, as on one rank.
+one_blocks=$(grep -o 'Name="[a-z]*" GridType="Uniform">' "$work/one/frames.xdmf" | wc -l)
+if [ "$one_blocks" -lt 4 ] || ! diff <(grep -o 'NumberOfElements="[0-9]*"' "$work/one/frames.xdmf") \
+    <(grep -o 'NumberOfElements="[0-9]*"' "$work/many/frames.xdmf"); then
+  echo "FAIL: frames.xdmf blocks differ between one rank and 2 ranks + restart on 3"; exit 1
+fi
+echo "restart across ranks: energy.csv and front.csv identical ($rows rows), frames agree"
