@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <csignal>
 #include <cmath>
@@ -67,7 +68,9 @@ std::array<int, 3> parse_procs(const std::string& s) {
     if (next == std::string::npos) break;
     at = next + 1;
   }
-  if (k != 3) throw InputError("--procs: '" + s + "' is not three counts such as 2x1x1 (0 = any)");
+  const auto seps = std::count_if(s.begin(), s.end(), [](char c) { return c == 'x' || c == ','; });
+  if (k != 3 || seps != 2)
+    throw InputError("--procs: '" + s + "' is not three counts such as 2x1x1 (0 = any)");
   return p;
 }
 
@@ -81,6 +84,13 @@ std::unique_ptr<SolverBase> make_solver(const Scene& scene, Backend backend, std
   if (rep.fluid == 0)
     throw InputError(scene.source + ": fluid_blocks: the scene holds no fluid particles");
   const int nranks = world_size();
+  // A process grid asking for more ranks than this run has is refused (0 = any, counts as 1).
+  const int asked = std::max(procs[0], 1) * std::max(procs[1], 1) * std::max(procs[2], 1);
+  if (nranks == 1 && asked > 1)
+    throw InputError("--procs: " + std::to_string(procs[0]) + "x" + std::to_string(procs[1]) + "x" +
+                     std::to_string(procs[2]) + " asks for " + std::to_string(asked) +
+                     " ranks, but this run has 1 (start it with mpirun -n " +
+                     std::to_string(asked) + ")");
   if (nranks > 1) {
     const StepParams p = make_step_params(scene, c0);
     for (int k = 0; k < 3; ++k)
@@ -452,7 +462,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
   // ---- end in situ ----
 
   SignalGuard signals(opt.handle_signals);
-  const bool tty = !opt.quiet && isatty(STDOUT_FILENO);
+  const bool tty = root && !opt.quiet && isatty(STDOUT_FILENO);  // rank 0 prints progress
   using clock = std::chrono::steady_clock;
   const auto start = clock::now();
   auto last_progress = start, last_checkpoint_wall = start;
@@ -546,7 +556,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
         }
       }
       const double since = std::chrono::duration<double>(now - last_progress).count();
-      if (!opt.quiet && (since > (tty ? 0.25 : opt.progress_every_s))) {
+      if (root && !opt.quiet && (since > (tty ? 0.25 : opt.progress_every_s))) {
         last_progress = now;
         const double wall = std::chrono::duration<double>(now - start).count();
         const double rate = steps / wall;
