@@ -23,6 +23,8 @@
 #include "io/csv_series.hpp"
 #include "io/frames.hpp"
 #include "io/insitu.hpp"
+#include "granular.hpp"
+#include "run_common.hpp"
 
 namespace sphdem {
 
@@ -253,98 +255,11 @@ class DiagnosticWriter {
 };
 
 // Both to the terminal and to run.log.
-class Log {
- public:
-  // Only rank 0 logs (enabled = false: a sink).
-  Log(const std::string& path, bool quiet, bool append, bool enabled = true)
-      : quiet_(quiet || !enabled) {
-    if (!enabled) return;
-    file_.open(path, append ? std::ios::app : std::ios::trunc);
-    if (!file_) throw InputError("cannot write run log '" + path + "'");
-  }
-  template <class T>
-  Log& operator<<(const T& v) {
-    file_ << v;
-    if (!quiet_) std::cout << v;
-    return *this;
-  }
-  void flush() {
-    file_.flush();
-    std::cout.flush();
-  }
-  std::ofstream& file() { return file_; }
-
- private:
-  std::ofstream file_;
-  bool quiet_;
-};
-
-std::string fmt_duration(double s) {
-  std::ostringstream os;
-  if (!std::isfinite(s)) return "?";
-  if (s < 120) {
-    os << std::fixed << std::setprecision(0) << s << " s";
-  } else if (s < 7200) {
-    os << std::fixed << std::setprecision(1) << s / 60 << " min";
-  } else {
-    os << std::fixed << std::setprecision(1) << s / 3600 << " h";
-  }
-  return os.str();
-}
-
-void write_summary(const std::string& path, const Scene& scene, const RunResult& r) {
-  std::ofstream f(path);
-  f << std::setprecision(10) << "{\n"
-    << "  \"scene\": \"" << scene.name << "\",\n"
-    << "  \"backend\": \"" << r.space << "\",\n"
-    << "  \"steps\": " << r.steps << ",\n"
-    << "  \"sim_time\": " << r.sim_time << ",\n"
-    << "  \"wall_seconds\": " << r.wall_seconds << ",\n"
-    << "  \"particles\": {\"fluid\": " << r.fluid << ", \"wall_boundary\": " << r.wall
-    << ", \"grain_boundary\": " << r.grain << "},\n"
-    << "  \"removed\": {\"count\": " << r.removed << ", \"mass\": " << r.removed_mass << "},\n"
-    << "  \"particle_steps_per_second\": " << r.particle_steps_per_second << ",\n"
-    << "  \"checkpoints\": " << r.checkpoints << ",\n"
-    << "  \"last_checkpoint\": \"" << r.last_checkpoint << "\",\n"
-    << "  \"status\": \""
-    << (r.unstable ? "unstable" : (r.interrupted ? "interrupted" : "completed")) << "\"";
-  if (r.unstable) {
-    std::string msg;
-    for (char c : r.failure)
-      msg += (c == '"' || c == '\\') ? std::string("\\") + c : std::string(1, c);
-    f << ",\n  \"failure\": \"" << msg << "\"";
-  }
-  f << "\n}\n";
-}
-
 }  // namespace
 
-namespace {
-// Set by SIGTERM / SIGUSR1; polled once per step.
-volatile std::sig_atomic_t g_signal = 0;
-extern "C" void on_signal(int sig) {
-  g_signal = sig;
-}
-
-struct SignalGuard {
-  explicit SignalGuard(bool on) : on_(on) {
-    if (!on_) return;
-    g_signal = 0;
-    old_term_ = std::signal(SIGTERM, on_signal);
-    old_usr1_ = std::signal(SIGUSR1, on_signal);
-  }
-  ~SignalGuard() {
-    if (!on_) return;
-    std::signal(SIGTERM, old_term_);
-    std::signal(SIGUSR1, old_usr1_);
-  }
-  bool on_;
-  void (*old_term_)(int) = SIG_DFL;
-  void (*old_usr1_)(int) = SIG_DFL;
-};
-}  // namespace
 
 RunResult run_scene(const Scene& scene, const RunOptions& opt) {
+  if (is_granular(scene)) return run_granular(scene, opt);
   namespace fs = std::filesystem;
   std::error_code ec;
   fs::create_directories(opt.out_dir, ec);
@@ -612,6 +527,10 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
 }
 
 void check_scene(const Scene& scene, std::ostream& os) {
+  if (is_granular(scene)) {
+    check_granular(scene, os);
+    return;
+  }
   BuildReport rep;
   ParticleSet<Host> ps = build_particles(scene, &rep);
   const Real c0 = resolve_sound_speed(scene, rep);

@@ -241,6 +241,14 @@ const EnumTable<SlipCondition> kSlipConditions = {{"noslip", SlipCondition::kNoS
                                                   {"freeslip", SlipCondition::kFreeSlip}};
 const EnumTable<Integrator> kIntegrators = {{"verlet", Integrator::kVerlet},
                                             {"symplectic", Integrator::kSymplectic}};
+const EnumTable<GrainShapeType> kGrainShapes = {
+    {"sphere", GrainShapeType::kSphere},
+    {"box", GrainShapeType::kBox},
+    {"ellipsoid", GrainShapeType::kEllipsoid},
+    {"trigonal_pyramid", GrainShapeType::kTrigonalPyramid},
+    {"polyhedron", GrainShapeType::kPolyhedron},
+    {"mesh", GrainShapeType::kMesh}};
+const EnumTable<std::string> kContactLaws = {{"linear", "linear"}, {"hertz", "hertz"}};
 
 enum class ShapeType {
   kBox,
@@ -506,6 +514,8 @@ class Parser {
   void parse_frames(const Field& f);
   void parse_insitu(const Field& f);
   void parse_solids(const Field& f);
+  void parse_dem(const Field& f);
+  ContactParams parse_contact(const Field& f, bool wall) const;
   void parse_fluid_blocks(const Field& f);
   void parse_diagnostics(const Field& f);
   geom::SdfPtr parse_shape(const Field& f) const;
@@ -583,7 +593,7 @@ Scene Parser::parse(const YAML::Node& root) {
   MapReader top =
       map(Field{root, root.Mark(), ""},
           {"name", "dimension", "domain", "gravity", "fluid", "sph", "time", "guards", "checkpoint",
-           "parallel", "frames", "insitu", "solids", "fluid_blocks", "diagnostics"});
+           "parallel", "frames", "insitu", "solids", "fluid_blocks", "diagnostics", "dem"});
   s.name = name(top.require("name"));
   s.dim = dim_ = integer(top.require("dimension"), 2, 3);
   parse_domain(top.require("domain"));
@@ -592,7 +602,9 @@ Scene Parser::parse(const YAML::Node& root) {
     check_planar(*f, s.gravity);
   }
   if (auto f = top.find("fluid")) parse_fluid(*f);
-  parse_sph(top.require("sph"));
+  // A scene of grains only (a `dem` section and no fluid_blocks) needs no `sph` section.
+  const bool grains_only = top.find("dem") && !top.find("fluid_blocks");
+  if (auto f = top.find("sph"); f || !grains_only) parse_sph(top.require("sph"));
   parse_time(top.require("time"));
   if (auto f = top.find("guards")) parse_guards(*f);
   if (auto f = top.find("checkpoint")) parse_checkpoint(*f);
@@ -602,6 +614,7 @@ Scene Parser::parse(const YAML::Node& root) {
   if (auto f = top.find("solids")) parse_solids(*f);
   if (auto f = top.find("fluid_blocks")) parse_fluid_blocks(*f);
   if (auto f = top.find("diagnostics")) parse_diagnostics(*f);
+  if (auto f = top.find("dem")) parse_dem(*f);
   scene_ = nullptr;
   return s;
 }
@@ -789,6 +802,147 @@ void Parser::parse_solids(const Field& f) {
     if (!fresh) fail(f_name, "duplicate solid name '" + solid.name + "' (also " + it->second + ")");
     solid.sdf = parse_shape(m.require("shape"));
     scene_->solids.push_back(std::move(solid));
+  }
+}
+
+ContactParams Parser::parse_contact(const Field& f, bool wall) const {
+  ContactParams c;
+  std::vector<std::string> keys{"law", "kn", "young", "poisson", "restitution", "friction"};
+  if (wall) {
+    keys.push_back("wall_young");
+    keys.push_back("wall_poisson");
+  }
+  MapReader m = map(f, keys);
+  c.law = m.enumeration("law", kContactLaws, c.law);
+  c.kn = m.number("kn", closed(0, 1e12), c.kn);
+  c.young = m.number("young", closed(0, 1e13), c.young);
+  c.poisson = m.number("poisson", closed(0, 0.5), c.poisson);
+  c.restitution = m.number("restitution", left_open(0, 1), c.restitution);
+  c.friction = m.number("friction", closed(0, 10), c.friction);
+  if (wall) {
+    c.wall_young = m.number("wall_young", closed(0, 1e13), c.wall_young);
+    c.wall_poisson = m.number("wall_poisson", closed(0, 0.5), c.wall_poisson);
+  }
+  if (c.kn == 0 && c.young == 0)
+    fail(f, "give either kn (normal stiffness per node, N/m) or young (Young's modulus, Pa)");
+  return c;
+}
+
+void Parser::parse_dem(const Field& f) {
+  DemScene& d = scene_->dem;
+  d.enabled = true;
+  if (dim_ != 3) fail(f, "DEM grains need dimension: 3");
+  MapReader m = map(f, {"grain_grain", "grain_wall", "stiffness_overlap", "nodes_per_contact",
+                        "dt_factor", "overlap_max", "settle", "shapes", "packs", "walls", "heap"});
+  d.grain_grain = parse_contact(m.require("grain_grain"), false);
+  d.grain_wall = parse_contact(m.require("grain_wall"), true);
+  d.stiffness_overlap = m.number("stiffness_overlap", left_open(0, 1), d.stiffness_overlap);
+  d.nodes_per_contact = m.number("nodes_per_contact", closed(1, 1e4), d.nodes_per_contact);
+  d.dt_factor = m.number("dt_factor", left_open(0, 100), d.dt_factor);
+  d.overlap_max = m.number("overlap_max", left_open(0, 1), d.overlap_max);
+  if (auto s = m.find("settle")) {
+    MapReader sm = map(*s, {"until", "damping"});
+    d.settle_until = sm.number("until", closed(0, 1e6));
+    d.settle_damping = sm.number("damping", closed(0, 1e6), d.settle_damping);
+  }
+  if (auto h = m.find("heap")) {
+    MapReader hm = map(*h, {"floor", "x_min", "x_max", "origin"});
+    d.heap = true;
+    d.heap_floor = hm.number("floor", kCoord, d.heap_floor);
+    d.heap_x_min = hm.number("x_min", kCoord, -1e6);
+    d.heap_x_max = hm.number("x_max", kCoord, 1e6);
+    d.heap_origin = hm.number("origin", kCoord, d.heap_origin);
+  }
+  std::map<std::string, std::string> shape_names;
+  for (const Field& item : list(m.require("shapes"))) {
+    Field f_type = MapReader(*this, item, {"name", "type", "diameter", "size", "perturbation",
+                                           "planes", "variants", "seed", "file", "scale",
+                                           "grid_spacing", "node_spacing"})
+                       .require("type");
+    GrainShape g;
+    g.type = enumeration(f_type, kGrainShapes);
+    std::vector<std::string> keys{"name", "type", "variants", "seed", "grid_spacing",
+                                  "node_spacing"};
+    switch (g.type) {
+      case GrainShapeType::kSphere: keys.push_back("diameter"); break;
+      case GrainShapeType::kBox:
+      case GrainShapeType::kEllipsoid: keys.push_back("size"); break;
+      case GrainShapeType::kTrigonalPyramid:
+        keys.insert(keys.end(), {"diameter", "perturbation"});
+        break;
+      case GrainShapeType::kPolyhedron: keys.insert(keys.end(), {"diameter", "planes"}); break;
+      case GrainShapeType::kMesh: keys.insert(keys.end(), {"file", "scale"}); break;
+    }
+    MapReader sm = map(item, keys);
+    Field f_name = sm.require("name");
+    g.name = name(f_name);
+    auto [it, fresh] = shape_names.emplace(g.name, f_name.path);
+    if (!fresh) fail(f_name, "duplicate shape name '" + g.name + "' (also " + it->second + ")");
+    if (sm.find("diameter")) g.diameter = sm.number("diameter", kLength);
+    else if (g.type == GrainShapeType::kSphere || g.type == GrainShapeType::kTrigonalPyramid ||
+             g.type == GrainShapeType::kPolyhedron)
+      sm.require("diameter");
+    if (g.type == GrainShapeType::kBox || g.type == GrainShapeType::kEllipsoid) {
+      g.size = sm.vec3("size", kLength);
+    }
+    g.perturbation = sm.number("perturbation", closed(0, 0.3), g.perturbation);
+    g.planes = sm.integer("planes", 6, 200, g.planes);
+    g.variants = sm.integer("variants", 1, 1000, g.variants);
+    g.seed = std::uint32_t(sm.integer("seed", 0, 2000000000, int(g.seed)));
+    g.grid_spacing = sm.number("grid_spacing", closed(0, 1), g.grid_spacing);
+    g.node_spacing = sm.number("node_spacing", closed(0, 1), g.node_spacing);
+    if (g.type == GrainShapeType::kMesh) {
+      namespace fs = std::filesystem;
+      fs::path path = string(sm.require("file"));
+      if (path.is_relative()) path = fs::path(scene_->source).parent_path() / path;
+      g.file = path.string();
+      g.scale = sm.number("scale", kLength, g.scale);
+    }
+    d.shapes.push_back(std::move(g));
+  }
+  for (const Field& item : list(m.require("packs"))) {
+    MapReader pm = map(item, {"shape", "count", "density", "lo", "hi", "velocity",
+                              "random_orientation", "seed"});
+    GrainPack p;
+    Field f_shape = pm.require("shape");
+    p.shape = string(f_shape);
+    if (!shape_names.count(p.shape)) {
+      std::vector<std::string> names;
+      for (const auto& [n, where] : shape_names) names.push_back(n);
+      fail(f_shape, "no shape named '" + p.shape + "'; shapes are: " + join(names));
+    }
+    p.count = pm.integer("count", 1, 100000000, 0);
+    if (!pm.find("count")) pm.require("count");
+    p.density = pm.number("density", left_open(0, 1e5), p.density);
+    p.lo = pm.vec3("lo", kCoord);
+    Field f_hi = pm.require("hi");
+    p.hi = vec3(f_hi, kCoord);
+    check_above(f_hi, p.lo, p.hi, {0, 1, 2});
+    p.velocity = pm.vec3("velocity", closed(-1e3, 1e3), p.velocity);
+    p.random_orientation = pm.boolean("random_orientation", p.random_orientation);
+    p.seed = std::uint32_t(pm.integer("seed", 0, 2000000000, int(p.seed)));
+    d.packs.push_back(p);
+  }
+  if (auto w = m.find("walls")) {
+    for (const Field& item : list(*w)) {
+      MapReader wm = map(item, {"solid", "velocity", "start", "stop"});
+      GrainWall gw;
+      Field f_s = wm.require("solid");
+      gw.solid = string(f_s);
+      if (!scene_->find_solid(gw.solid)) {
+        std::vector<std::string> names;
+        for (const Solid& s : scene_->solids) names.push_back(s.name);
+        fail(f_s, "no solid named '" + gw.solid + "'; " +
+                      (names.empty() ? std::string("the scene has no solids")
+                                     : "solids are: " + join(names)));
+      }
+      gw.velocity = wm.vec3("velocity", closed(-1e3, 1e3), gw.velocity);
+      gw.start = wm.number("start", closed(0, 1e6), gw.start);
+      Field f_stop = wm.find("stop") ? *wm.find("stop") : item;
+      gw.stop = wm.number("stop", closed(0, 1e30), gw.stop);
+      if (gw.stop <= gw.start) fail(f_stop, "stop must be after start (" + fmt(gw.start) + ")");
+      d.walls.push_back(gw);
+    }
   }
 }
 

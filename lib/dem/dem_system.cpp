@@ -276,6 +276,23 @@ void DemSystem::compute_forces(Real dt) {
       eval_[i].w += Real(0.5) * dt * alpha_prev_[i];
     }
   find_pairs();
+  // World positions of every grain's surface nodes, once per step (a pair would otherwise rotate
+  // the same nodes again for every neighbour).
+  node_begin_.assign(n + 1, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    const GrainTemplate& t = *templates_[std::size_t(eval_[i].shape)];
+    node_begin_[i + 1] = node_begin_[i] + (t.is_sphere() ? 0 : t.nodes().size());
+  }
+  world_nodes_.resize(node_begin_[n]);
+  run_each(Index(n), [&](Index ii) {
+    const std::size_t i = std::size_t(ii);
+    const RigidBody& b = eval_[i];
+    const GrainTemplate& t = *templates_[std::size_t(b.shape)];
+    if (t.is_sphere()) return;
+    Vec3* w = world_nodes_.data() + node_begin_[i];
+    const auto& nodes = t.nodes();
+    for (std::size_t k = 0; k < nodes.size(); ++k) w[k] = b.x + rotate(b.q, nodes[k]);
+  });
   const Index np = Index(pairs_.size());
   std::vector<PairOut> pout(static_cast<std::size_t>(np));
 
@@ -307,14 +324,15 @@ void DemSystem::compute_forces(Real dt) {
       return;
     }
     // Level-set master-slave test in both orders, each with weight 1/2.
-    auto pass = [&](const RigidBody& m, const GrainTemplate& tm, const RigidBody& s,
-                    const GrainTemplate& ts, Load& load_m, Load& load_s) {
+    auto pass = [&](const RigidBody& m, const GrainTemplate& tm, std::size_t mi,
+                    const RigidBody& s, const GrainTemplate& ts, Load& load_m, Load& load_s) {
       const geom::GridSdfView phi_s = ts.view();
       const Quat qs_inv = conjugate(s.q);
       const Real reach2 = ts.bounding_radius() * ts.bounding_radius();
-      const auto& nodes = tm.nodes();
-      for (std::size_t k = 0; k < nodes.size(); ++k) {
-        const Vec3 x = m.x + rotate(m.q, nodes[k]);
+      const std::size_t nn = tm.nodes().size();
+      const Vec3* wn = world_nodes_.data() + node_begin_[mi];
+      for (std::size_t k = 0; k < nn; ++k) {
+        const Vec3& x = wn[k];
         if (norm2(x - s.x) > reach2) continue;
         const Vec3 y = rotate(qs_inv, x - s.x);
         const Real ph = geom::grid_phi(phi_s, y);
@@ -334,8 +352,8 @@ void DemSystem::compute_forces(Real dt) {
         out.hist.push_back({key, spring});
       }
     };
-    pass(a, ta, b, tb, out.a, out.b);
-    pass(b, tb, a, ta, out.b, out.a);
+    pass(a, ta, pairs_[std::size_t(pi)].first, b, tb, out.a, out.b);
+    pass(b, tb, pairs_[std::size_t(pi)].second, a, ta, out.b, out.a);
   });
 
   // ---- per-body gather: walls, then the body's pairs in pair order ----
@@ -372,9 +390,10 @@ void DemSystem::compute_forces(Real dt) {
           whist[i].push_back({key, s});
           continue;
         }
-        const auto& nodes = t.nodes();
-        for (std::size_t k = 0; k < nodes.size(); ++k) {
-          const Vec3 x = b.x + rotate(b.q, nodes[k]);
+        const std::size_t nn = t.nodes().size();
+        const Vec3* wn = world_nodes_.data() + node_begin_[i];
+        for (std::size_t k = 0; k < nn; ++k) {
+          const Vec3& x = wn[k];
           const Real ph = wall_phi(wall, x);
           if (!(ph < 0)) continue;
           const Vec3 nrm = wall_normal(wall, x);

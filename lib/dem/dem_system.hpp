@@ -162,6 +162,8 @@ class DemSystem {
   std::vector<Vec3> force_, torque_, ext_force_, ext_torque_;
   std::vector<Vec3> acc_prev_, alpha_prev_;  // last step's dv/dt (world) and dw/dt (body)
   std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs_;
+  std::vector<std::size_t> node_begin_;  // body i's nodes: world_nodes_[node_begin_[i] ...]
+  std::vector<Vec3> world_nodes_;        // surface nodes in the world frame, this step
   std::vector<ContactKey> hist_keys_;  // sorted
   std::vector<Vec3> hist_springs_;
   Real time_ = 0, max_overlap_ = 0;

@@ -158,6 +158,70 @@ struct Diagnostics {
   bool energy = true;
 };
 
+// ---- DEM grains (lib/dem; seed §2.2) --------------------------------------------------------
+enum class GrainShapeType { kSphere, kBox, kEllipsoid, kTrigonalPyramid, kPolyhedron, kMesh };
+
+// One grain shape; `variants` > 1 makes that many seeded templates (pyramids, polyhedra) and the
+// packs cycle through them.
+struct GrainShape {
+  std::string name;
+  GrainShapeType type = GrainShapeType::kSphere;
+  Real diameter = 0;   // sphere diameter; equivalent diameter of pyramids and polyhedra
+  Vec3 size;           // box full extents; ellipsoid full axes
+  Real perturbation = 0.15;  // pyramid vertex jitter, in units of its edge
+  int planes = 12;           // polyhedron cutting planes
+  int variants = 1;
+  std::uint32_t seed = 1;
+  std::string file;  // mesh (STL/OBJ), resolved against the scene file's folder
+  Real scale = 1;    // mesh scale
+  Real grid_spacing = 0, node_spacing = 0;  // 0: template defaults (size / 30)
+};
+
+// A block of grains: `count` grains, each in a seeded random orientation, placed without overlap
+// by shelf-packing their world bounding boxes into [lo, hi] from the bottom up (rows along x,
+// then y, then layers along z). Packs are usually rained into place under gravity (dem.settle).
+struct GrainPack {
+  std::string shape;
+  int count = 0;
+  Real density = 2500;
+  Vec3 lo, hi;
+  Vec3 velocity;
+  bool random_orientation = true;
+  std::uint32_t seed = 1;
+};
+
+// A solid used as a DEM wall; moving walls translate at `velocity` for start <= t < stop.
+struct GrainWall {
+  std::string solid;
+  Vec3 velocity;
+  Real start = 0, stop = 1e30;
+};
+
+struct ContactParams {
+  std::string law = "linear";  // linear | hertz (hertz: sphere contacts only)
+  Real kn = 0;                 // per node [N/m]; 0: from young (dem/contact_law.hpp)
+  Real young = 0, poisson = 0.3, restitution = 0.5, friction = 0.5;
+  Real wall_young = 0, wall_poisson = 0.3;  // grain-wall only; 0: rigid wall
+};
+
+struct DemScene {
+  bool enabled = false;
+  ContactParams grain_grain, grain_wall;
+  Real stiffness_overlap = 1e-2;
+  Real nodes_per_contact = 1;
+  Real dt_factor = 1;       // dt = dt_factor * t_c / 50 (time.dt_fixed overrides)
+  Real overlap_max = 0.1;   // guard: overlap above this fraction of the smallest grain diameter
+  Real settle_damping = 0;  // [1/s] drag -c m v on every grain while t < settle_until (packing)
+  Real settle_until = 0;
+  std::vector<GrainShape> shapes;
+  std::vector<GrainPack> packs;
+  std::vector<GrainWall> walls;
+  // Heap measurement at the end of the run (diagnostics/heap.hpp): floor height, slope fit window
+  // in x, and the x from which the run-out is measured (the baffle).
+  bool heap = false;
+  Real heap_floor = 0, heap_x_min = -1e30, heap_x_max = 1e30, heap_origin = 0;
+};
+
 struct Scene {
   std::string source;  // file it came from
   std::string name;
@@ -176,6 +240,7 @@ struct Scene {
   ParallelParams parallel;
   FrameParams frames;
   InSituParams insitu;
+  DemScene dem;
   std::string yaml_text;  // the resolved scene as YAML, stored in outputs and checkpoints
 
   Real h() const;  // smoothing length

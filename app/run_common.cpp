@@ -1,0 +1,65 @@
+#include "run_common.hpp"
+
+#include <cmath>
+#include <iomanip>
+#include <sstream>
+
+namespace sphdem {
+
+std::string fmt_duration(double s) {
+  std::ostringstream os;
+  if (!std::isfinite(s)) return "?";
+  if (s < 120) {
+    os << std::fixed << std::setprecision(0) << s << " s";
+  } else if (s < 7200) {
+    os << std::fixed << std::setprecision(1) << s / 60 << " min";
+  } else {
+    os << std::fixed << std::setprecision(1) << s / 3600 << " h";
+  }
+  return os.str();
+}
+
+void write_summary(const std::string& path, const Scene& scene, const RunResult& r) {
+  std::ofstream f(path);
+  f << std::setprecision(10) << "{\n"
+    << "  \"scene\": \"" << scene.name << "\",\n"
+    << "  \"backend\": \"" << r.space << "\",\n"
+    << "  \"steps\": " << r.steps << ",\n"
+    << "  \"sim_time\": " << r.sim_time << ",\n"
+    << "  \"wall_seconds\": " << r.wall_seconds << ",\n"
+    << "  \"particles\": {\"fluid\": " << r.fluid << ", \"wall_boundary\": " << r.wall
+    << ", \"grain_boundary\": " << r.grain << "},\n"
+    << "  \"removed\": {\"count\": " << r.removed << ", \"mass\": " << r.removed_mass << "},\n"
+    << "  \"particle_steps_per_second\": " << r.particle_steps_per_second << ",\n"
+    << "  \"checkpoints\": " << r.checkpoints << ",\n"
+    << "  \"last_checkpoint\": \"" << r.last_checkpoint << "\",\n"
+    << "  \"status\": \""
+    << (r.unstable ? "unstable" : (r.interrupted ? "interrupted" : "completed")) << "\"";
+  if (r.unstable) {
+    std::string msg;
+    for (char c : r.failure)
+      msg += (c == '"' || c == '\\') ? std::string("\\") + c : std::string(1, c);
+    f << ",\n  \"failure\": \"" << msg << "\"";
+  }
+  f << "\n}\n";
+}
+
+
+volatile std::sig_atomic_t g_signal = 0;
+extern "C" void on_signal(int sig) {
+  g_signal = sig;
+}
+
+SignalGuard::SignalGuard(bool on) : on_(on) {
+  if (!on_) return;
+  g_signal = 0;
+  old_term_ = std::signal(SIGTERM, on_signal);
+  old_usr1_ = std::signal(SIGUSR1, on_signal);
+}
+SignalGuard::~SignalGuard() {
+  if (!on_) return;
+  std::signal(SIGTERM, old_term_);
+  std::signal(SIGUSR1, old_usr1_);
+}
+
+}  // namespace sphdem
