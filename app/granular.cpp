@@ -61,8 +61,8 @@ void check_grains(const Scene& scene, const dem::DemSystem& sys, Real min_d) {
   if (ratio > scene.dem.overlap_max) {
     std::ostringstream m;
     m << "DEM overlap " << sys.max_overlap() << " m = " << ratio
-      << " of the smallest grain diameter at t = " << sys.time() << " s exceeds dem.overlap_max = "
-      << scene.dem.overlap_max
+      << " of the smallest grain diameter at t = " << sys.time()
+      << " s exceeds dem.overlap_max = " << scene.dem.overlap_max
       << ": the contacts are too soft for the load or the step is too large (raise kn or young, "
          "lower dem.dt_factor or time.dt_fixed)";
     throw StabilityError(m.str());
@@ -71,8 +71,8 @@ void check_grains(const Scene& scene, const dem::DemSystem& sys, Real min_d) {
     for (int a = 0; a < 3; ++a) {
       if (!(b.x[a] >= scene.domain_lo[a] && b.x[a] <= scene.domain_hi[a])) {
         std::ostringstream m;
-        m << "DEM: grain " << b.id << " left the domain at t = " << sys.time() << " s (x = " << b.x.x
-          << ", " << b.x.y << ", " << b.x.z
+        m << "DEM: grain " << b.id << " left the domain at t = " << sys.time()
+          << " s (x = " << b.x.x << ", " << b.x.y << ", " << b.x.z
           << " m): a wall let it through (step too large for the contact stiffness?)";
         throw StabilityError(m.str());
       }
@@ -113,8 +113,8 @@ RunResult run_granular(const Scene& scene, const RunOptions& opt) {
   DemBuild build = build_dem(scene, blog);
   dem::DemSystem& sys = *build.system;
   log << blog.str();
-  log << "grains: " << sys.bodies().size() << ", walls: " << sys.walls().size()
-      << "; DEM step " << build.dt << " s (t_c/50 = " << sys.time_step()
+  log << "grains: " << sys.bodies().size() << ", walls: " << sys.walls().size() << "; DEM step "
+      << build.dt << " s (t_c/50 = " << sys.time_step()
       << " s); backend: host (the DEM runs on the CPU)\n";
 
   Real next_diag = 0;
@@ -146,8 +146,7 @@ RunResult run_granular(const Scene& scene, const RunOptions& opt) {
   std::ofstream diag(csv, restarting ? std::ios::app : std::ios::trunc);
   if (!diag) throw InputError("cannot write '" + csv + "'");
   diag << std::setprecision(10);
-  if (!restarting)
-    diag << "t,kinetic_energy,contacts,pairs,max_overlap_per_d,front_x,top_z\n";
+  if (!restarting) diag << "t,kinetic_energy,contacts,pairs,max_overlap_per_d,front_x,top_z\n";
   auto write_diag = [&]() {
     Real front = -1e30, top = -1e30;
     for (const dem::RigidBody& b : sys.bodies()) {
@@ -253,9 +252,9 @@ RunResult run_granular(const Scene& scene, const RunOptions& opt) {
         const double rate = double(steps) / wall;
         std::ostringstream line;
         line << "t = " << std::setprecision(4) << sys.time() << " s, step " << step << ", "
-             << std::setprecision(3) << rate << " steps/s, "
-             << rate * double(sys.bodies().size()) << " grain-steps/s, " << sys.contact_count()
-             << " contact points, ETA " << fmt_duration((end - sys.time()) / dt / rate);
+             << std::setprecision(3) << rate << " steps/s, " << rate * double(sys.bodies().size())
+             << " grain-steps/s, " << sys.contact_count() << " contact points, ETA "
+             << fmt_duration((end - sys.time()) / dt / rate);
         if (tty) {
           std::cout << "\r" << line.str() << "   " << std::flush;
         } else {
@@ -264,7 +263,9 @@ RunResult run_granular(const Scene& scene, const RunOptions& opt) {
         log.file() << line.str() << "\n";
       }
     }
-    if (!r.interrupted) {
+    // The final row and frame only at the end time: a run stopped early (--max-steps, SIGTERM)
+    // and continued from its checkpoint then writes the same rows as one straight run.
+    if (sys.time() >= end - Real(1e-12) * end) {
       write_diag();
       if (frames) frames->write(sys.time(), node_particles(sys));
     }
@@ -295,9 +296,9 @@ RunResult run_granular(const Scene& scene, const RunOptions& opt) {
     ho.x_max = scene.dem.heap_x_max;
     const HeapShape h = measure_heap(node_positions(sys), ho);
     log << "heap: repose angle " << h.repose_deg << " deg (plane fit over " << h.columns
-        << " columns, rms " << h.fit_rms << " m), height " << h.height << " m, toe at x = "
-        << h.toe << " m, run-out from x = " << scene.dem.heap_origin << ": "
-        << h.toe - scene.dem.heap_origin << " m\n";
+        << " columns, rms " << h.fit_rms << " m), height " << h.height << " m, toe at x = " << h.toe
+        << " m, run-out from x = " << scene.dem.heap_origin << ": " << h.toe - scene.dem.heap_origin
+        << " m\n";
     std::ofstream j(opt.out_dir + "/heap.json");
     j << std::setprecision(8) << "{\n  \"repose_deg\": " << h.repose_deg
       << ",\n  \"height\": " << h.height << ",\n  \"toe\": " << h.toe

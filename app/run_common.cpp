@@ -44,7 +44,6 @@ void write_summary(const std::string& path, const Scene& scene, const RunResult&
   f << "\n}\n";
 }
 
-
 volatile std::sig_atomic_t g_signal = 0;
 extern "C" void on_signal(int sig) {
   g_signal = sig;

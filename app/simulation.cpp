@@ -257,7 +257,6 @@ class DiagnosticWriter {
 // Both to the terminal and to run.log.
 }  // namespace
 
-
 RunResult run_scene(const Scene& scene, const RunOptions& opt) {
   if (is_granular(scene)) return run_granular(scene, opt);
   namespace fs = std::filesystem;

@@ -855,30 +855,39 @@ void Parser::parse_dem(const Field& f) {
   }
   std::map<std::string, std::string> shape_names;
   for (const Field& item : list(m.require("shapes"))) {
-    Field f_type = MapReader(*this, item, {"name", "type", "diameter", "size", "perturbation",
-                                           "planes", "variants", "seed", "file", "scale",
-                                           "grid_spacing", "node_spacing"})
+    Field f_type = MapReader(*this, item,
+                             {"name", "type", "diameter", "size", "perturbation", "planes",
+                              "variants", "seed", "file", "scale", "grid_spacing", "node_spacing"})
                        .require("type");
     GrainShape g;
     g.type = enumeration(f_type, kGrainShapes);
-    std::vector<std::string> keys{"name", "type", "variants", "seed", "grid_spacing",
-                                  "node_spacing"};
+    std::vector<std::string> keys{"name", "type",         "variants",
+                                  "seed", "grid_spacing", "node_spacing"};
     switch (g.type) {
-      case GrainShapeType::kSphere: keys.push_back("diameter"); break;
+      case GrainShapeType::kSphere:
+        keys.push_back("diameter");
+        break;
       case GrainShapeType::kBox:
-      case GrainShapeType::kEllipsoid: keys.push_back("size"); break;
+      case GrainShapeType::kEllipsoid:
+        keys.push_back("size");
+        break;
       case GrainShapeType::kTrigonalPyramid:
         keys.insert(keys.end(), {"diameter", "perturbation"});
         break;
-      case GrainShapeType::kPolyhedron: keys.insert(keys.end(), {"diameter", "planes"}); break;
-      case GrainShapeType::kMesh: keys.insert(keys.end(), {"file", "scale"}); break;
+      case GrainShapeType::kPolyhedron:
+        keys.insert(keys.end(), {"diameter", "planes"});
+        break;
+      case GrainShapeType::kMesh:
+        keys.insert(keys.end(), {"file", "scale"});
+        break;
     }
     MapReader sm = map(item, keys);
     Field f_name = sm.require("name");
     g.name = name(f_name);
     auto [it, fresh] = shape_names.emplace(g.name, f_name.path);
     if (!fresh) fail(f_name, "duplicate shape name '" + g.name + "' (also " + it->second + ")");
-    if (sm.find("diameter")) g.diameter = sm.number("diameter", kLength);
+    if (sm.find("diameter"))
+      g.diameter = sm.number("diameter", kLength);
     else if (g.type == GrainShapeType::kSphere || g.type == GrainShapeType::kTrigonalPyramid ||
              g.type == GrainShapeType::kPolyhedron)
       sm.require("diameter");
@@ -901,8 +910,8 @@ void Parser::parse_dem(const Field& f) {
     d.shapes.push_back(std::move(g));
   }
   for (const Field& item : list(m.require("packs"))) {
-    MapReader pm = map(item, {"shape", "count", "density", "lo", "hi", "velocity",
-                              "random_orientation", "seed"});
+    MapReader pm = map(
+        item, {"shape", "count", "density", "lo", "hi", "velocity", "random_orientation", "seed"});
     GrainPack p;
     Field f_shape = pm.require("shape");
     p.shape = string(f_shape);

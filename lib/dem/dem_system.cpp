@@ -284,14 +284,32 @@ void DemSystem::compute_forces(Real dt) {
     node_begin_[i + 1] = node_begin_[i] + (t.is_sphere() ? 0 : t.nodes().size());
   }
   world_nodes_.resize(node_begin_[n]);
+  box_lo_.resize(n);
+  box_hi_.resize(n);
   run_each(Index(n), [&](Index ii) {
     const std::size_t i = std::size_t(ii);
     const RigidBody& b = eval_[i];
     const GrainTemplate& t = *templates_[std::size_t(b.shape)];
-    if (t.is_sphere()) return;
+    if (t.is_sphere()) {
+      const Real r = t.radius();
+      box_lo_[i] = b.x - Vec3(r, r, r);
+      box_hi_[i] = b.x + Vec3(r, r, r);
+      return;
+    }
     Vec3* w = world_nodes_.data() + node_begin_[i];
     const auto& nodes = t.nodes();
-    for (std::size_t k = 0; k < nodes.size(); ++k) w[k] = b.x + rotate(b.q, nodes[k]);
+    Vec3 lo = b.x, hi = b.x;
+    for (std::size_t k = 0; k < nodes.size(); ++k) {
+      w[k] = b.x + rotate(b.q, nodes[k]);
+      for (int d = 0; d < 3; ++d) {
+        lo[d] = std::min(lo[d], w[k][d]);
+        hi[d] = std::max(hi[d], w[k][d]);
+      }
+    }
+    // The nodes sample the surface; pad by one node spacing so the box holds the whole grain.
+    const Real pad = t.node_spacing();
+    box_lo_[i] = lo - Vec3(pad, pad, pad);
+    box_hi_[i] = hi + Vec3(pad, pad, pad);
   });
   const Index np = Index(pairs_.size());
   std::vector<PairOut> pout(static_cast<std::size_t>(np));
@@ -323,16 +341,27 @@ void DemSystem::compute_forces(Real dt) {
       out.hist.push_back({key, s});
       return;
     }
+    // Bounding boxes of the surfaces apart: no node of one can be inside the other.
+    {
+      const std::size_t ia = pairs_[std::size_t(pi)].first, ib = pairs_[std::size_t(pi)].second;
+      for (int d = 0; d < 3; ++d)
+        if (box_lo_[ia][d] > box_hi_[ib][d] || box_lo_[ib][d] > box_hi_[ia][d]) return;
+    }
     // Level-set master-slave test in both orders, each with weight 1/2.
-    auto pass = [&](const RigidBody& m, const GrainTemplate& tm, std::size_t mi,
-                    const RigidBody& s, const GrainTemplate& ts, Load& load_m, Load& load_s) {
+    auto pass = [&](const RigidBody& m, const GrainTemplate& tm, std::size_t mi, const RigidBody& s,
+                    const GrainTemplate& ts, Load& load_m, Load& load_s) {
       const geom::GridSdfView phi_s = ts.view();
       const Quat qs_inv = conjugate(s.q);
       const Real reach2 = ts.bounding_radius() * ts.bounding_radius();
       const std::size_t nn = tm.nodes().size();
       const Vec3* wn = world_nodes_.data() + node_begin_[mi];
+      const std::size_t si = mi == pairs_[std::size_t(pi)].first ? pairs_[std::size_t(pi)].second
+                                                                 : pairs_[std::size_t(pi)].first;
+      const Vec3 slo = box_lo_[si], shi = box_hi_[si];
       for (std::size_t k = 0; k < nn; ++k) {
         const Vec3& x = wn[k];
+        if (x.x < slo.x || x.x > shi.x || x.y < slo.y || x.y > shi.y || x.z < slo.z || x.z > shi.z)
+          continue;
         if (norm2(x - s.x) > reach2) continue;
         const Vec3 y = rotate(qs_inv, x - s.x);
         const Real ph = geom::grid_phi(phi_s, y);

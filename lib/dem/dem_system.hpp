@@ -164,7 +164,8 @@ class DemSystem {
   std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs_;
   std::vector<std::size_t> node_begin_;  // body i's nodes: world_nodes_[node_begin_[i] ...]
   std::vector<Vec3> world_nodes_;        // surface nodes in the world frame, this step
-  std::vector<ContactKey> hist_keys_;  // sorted
+  std::vector<Vec3> box_lo_, box_hi_;    // world bounding box of each grain, this step
+  std::vector<ContactKey> hist_keys_;    // sorted
   std::vector<Vec3> hist_springs_;
   Real time_ = 0, max_overlap_ = 0;
   GlobalId next_id_ = 0;

@@ -45,8 +45,8 @@ std::vector<dem::GrainTemplate> make_templates(const GrainShape& s, const std::s
         out.push_back(dem::GrainTemplate::ellipsoid(s.size / Real(2), opt));
         break;
       case GrainShapeType::kTrigonalPyramid:
-        out.push_back(
-            dem::GrainTemplate::trigonal_pyramid(s.diameter, s.perturbation, seed, s.diameter, opt));
+        out.push_back(dem::GrainTemplate::trigonal_pyramid(s.diameter, s.perturbation, seed,
+                                                           s.diameter, opt));
         break;
       case GrainShapeType::kPolyhedron:
         out.push_back(dem::GrainTemplate::random_polyhedron(s.diameter, s.planes, seed, opt));
@@ -155,8 +155,8 @@ DemBuild build_dem(const Scene& scene, std::ostream& log) {
         row_depth = layer_height = 0;
       }
       if (x + ext.x > p.hi.x || y + ext.y > p.hi.y || z + ext.z > p.hi.z) {
-        throw InputError(scene.source + ": dem.packs[" + std::to_string(k) + "]: " +
-                         std::to_string(p.count) + " grains do not fit in the box; " +
+        throw InputError(scene.source + ": dem.packs[" + std::to_string(k) +
+                         "]: " + std::to_string(p.count) + " grains do not fit in the box; " +
                          std::to_string(g) + " were placed up to z = " + std::to_string(z) +
                          " m (grain bounding diameter " + std::to_string(2 * rb) +
                          " m; raise hi.z or widen the box)");

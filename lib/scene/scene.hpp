@@ -166,8 +166,8 @@ enum class GrainShapeType { kSphere, kBox, kEllipsoid, kTrigonalPyramid, kPolyhe
 struct GrainShape {
   std::string name;
   GrainShapeType type = GrainShapeType::kSphere;
-  Real diameter = 0;   // sphere diameter; equivalent diameter of pyramids and polyhedra
-  Vec3 size;           // box full extents; ellipsoid full axes
+  Real diameter = 0;         // sphere diameter; equivalent diameter of pyramids and polyhedra
+  Vec3 size;                 // box full extents; ellipsoid full axes
   Real perturbation = 0.15;  // pyramid vertex jitter, in units of its edge
   int planes = 12;           // polyhedron cutting planes
   int variants = 1;

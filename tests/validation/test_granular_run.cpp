@@ -1,0 +1,190 @@
+// Grain-only runs (app/granular.cpp): a small pile of level-set pyramids rained into a box.
+// Settling, checkpoint/restart continuing bit-identically, a step too large caught with an
+// emergency checkpoint, and bad DEM input named by file and key.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "app/simulation.hpp"
+#include "core/error.hpp"
+#include "io/checkpoint.hpp"
+#include "io/scene_yaml.hpp"
+
+namespace sphdem {
+namespace {
+
+namespace fs = std::filesystem;
+
+const char* kPile = R"(name: pile
+dimension: 3
+domain: {lo: [-0.02, -0.02, -0.02], hi: [0.12, 0.12, 0.5]}
+time: {end: 0.6}
+solids:
+  - name: box
+    shape: {type: tank, inner_lo: [0, 0, 0], inner_hi: [0.1, 0.1, 0.4], thickness: 0.01}
+dem:
+  grain_grain: {kn: 2000, restitution: 0.3, friction: 0.5}
+  grain_wall: {kn: 2000, restitution: 0.3, friction: 0.5}
+  nodes_per_contact: 3
+  settle: {until: 0.3, damping: 10}
+  shapes:
+    - {name: rock, type: trigonal_pyramid, diameter: 0.012, variants: 3, seed: 5,
+       grid_spacing: 0.001, node_spacing: 0.003}
+  packs:
+    - {shape: rock, count: 40, density: 2500, lo: [0, 0, 0], hi: [0.1, 0.1, 0.4], seed: 2}
+  walls:
+    - {solid: box}
+diagnostics: {every: 0.01}
+frames: {every: 0.1, fields: [vel, id]}
+checkpoint: {every_steps: 200, keep: 20}
+)";
+
+std::string write_scene(const std::string& name, const std::string& text) {
+  const std::string path = (fs::current_path() / (name + ".yaml")).string();
+  std::ofstream(path) << text;
+  return path;
+}
+
+RunResult run(const Scene& s, const std::string& out, std::int64_t steps = -1,
+              const std::string& restart = "") {
+  fs::create_directories(out);
+  RunOptions o;
+  o.out_dir = out;
+  o.backend = Backend::kHost;
+  o.quiet = true;
+  o.max_steps = steps;
+  o.restart = restart;
+  o.handle_signals = false;
+  return run_scene(s, o);
+}
+
+std::vector<std::string> lines(const std::string& path) {
+  std::ifstream f(path);
+  std::vector<std::string> out;
+  for (std::string l; std::getline(f, l);) out.push_back(l);
+  return out;
+}
+
+TEST(GranularRun, PileSettlesAndWritesItsOutputs) {
+  fs::remove_all("pile_settle");
+  const Scene s = load_scene(write_scene("pile", kPile));
+  const RunResult r = run(s, "pile_settle");
+  ASSERT_FALSE(r.unstable) << r.failure;
+  EXPECT_EQ(r.grain, 40);
+  EXPECT_NEAR(r.sim_time, 0.6, 1e-3);
+  // grains.csv: the kinetic energy at the end is a tiny fraction of the fall's; grains touch.
+  const auto rows = lines("pile_settle/grains.csv");
+  ASSERT_GT(rows.size(), 50u);
+  EXPECT_EQ(rows[0], "t,kinetic_energy,contacts,pairs,max_overlap_per_d,front_x,top_z");
+  double t, ke, contacts, pairs, ov, front, top, ke_max = 0;
+  for (std::size_t i = 1; i < rows.size(); ++i) {
+    std::stringstream ss(rows[i]);
+    char c;
+    ss >> t >> c >> ke >> c >> contacts >> c >> pairs >> c >> ov >> c >> front >> c >> top;
+    ke_max = std::max(ke_max, ke);
+    EXPECT_LT(ov, 0.1) << rows[i];
+  }
+  EXPECT_LT(ke, 1e-3 * ke_max) << "the pile is not at rest";
+  EXPECT_GT(contacts, 40) << "a resting pile of 40 grains has more contact points than grains";
+  // All grains came down: the highest centre is below a few grain layers.
+  EXPECT_LT(top, 0.06);
+  // The frames index names the grains block with every surface node.
+  std::ifstream x("pile_settle/frames.xdmf");
+  std::stringstream xs;
+  xs << x.rdbuf();
+  EXPECT_NE(xs.str().find("grains"), std::string::npos);
+  std::ifstream js("pile_settle/summary.json");
+  std::stringstream jss;
+  jss << js.rdbuf();
+  EXPECT_NE(jss.str().find("\"completed\""), std::string::npos);
+}
+
+TEST(GranularRun, RestartContinuesBitIdentically) {
+  fs::remove_all("pile_straight");
+  fs::remove_all("pile_split");
+  const Scene s = load_scene(write_scene("pile", kPile));
+  run(s, "pile_straight", 600);
+  run(s, "pile_split", 400);
+  run(s, "pile_split", 200, checkpoint_path("pile_split", 400));
+  const CheckpointData a = read_checkpoint(checkpoint_path("pile_straight", 600));
+  const CheckpointData b = read_checkpoint(checkpoint_path("pile_split", 600));
+  ASSERT_EQ(a.dem.bodies.size(), 40u);
+  ASSERT_EQ(a.dem.bodies.size(), b.dem.bodies.size());
+  EXPECT_EQ(a.dem.time, b.dem.time);
+  for (std::size_t i = 0; i < a.dem.bodies.size(); ++i) {
+    const auto& p = a.dem.bodies[i];
+    const auto& q = b.dem.bodies[i];
+    EXPECT_EQ(std::memcmp(&p.x, &q.x, sizeof p.x), 0) << i;
+    EXPECT_EQ(std::memcmp(&p.v, &q.v, sizeof p.v), 0) << i;
+    EXPECT_EQ(std::memcmp(&p.q, &q.q, sizeof p.q), 0) << i;
+    EXPECT_EQ(std::memcmp(&p.w, &q.w, sizeof p.w), 0) << i;
+  }
+  ASSERT_EQ(a.dem.keys.size(), b.dem.keys.size());
+  EXPECT_GT(a.dem.keys.size(), 0u) << "the test should carry contact history across the restart";
+  for (std::size_t k = 0; k < a.dem.keys.size(); ++k) {
+    EXPECT_TRUE(a.dem.keys[k] == b.dem.keys[k]);
+    EXPECT_EQ(std::memcmp(&a.dem.springs[k], &b.dem.springs[k], sizeof(Vec3)), 0);
+  }
+  // The grains.csv of the split run has the same rows as the straight one.
+  EXPECT_EQ(lines("pile_straight/grains.csv"), lines("pile_split/grains.csv"));
+}
+
+TEST(GranularRun, StepTooLargeStopsWithEmergencyCheckpoint) {
+  fs::remove_all("pile_unstable");
+  // 30 times the t_c/50 step: a contact lasts under two steps; grains pass through each other
+  // or the walls, and the overlap guard must say so.
+  const Scene s = load_scene(write_scene("pile", kPile), {"dem.dt_factor=30"});
+  const RunResult r = run(s, "pile_unstable");
+  ASSERT_TRUE(r.unstable);
+  EXPECT_TRUE(r.failure.find("DEM overlap") != std::string::npos ||
+              r.failure.find("left the domain") != std::string::npos)
+      << r.failure;
+  EXPECT_LT(r.sim_time, 0.6);
+  ASSERT_FALSE(r.last_checkpoint.empty());
+  EXPECT_NE(r.last_checkpoint.find("emergency_step"), std::string::npos);
+  const CheckpointData cp = read_checkpoint(r.last_checkpoint);
+  EXPECT_EQ(cp.dem.bodies.size(), 40u);
+  const auto log = lines("pile_unstable/run.log");
+  bool said = false;
+  for (const auto& l : log) said = said || l.find("ERROR: ") == 0;
+  EXPECT_TRUE(said);
+}
+
+void expect_input_error(const std::string& text, const std::string& must_contain) {
+  const std::string path = write_scene("bad_pile", text);
+  try {
+    const Scene s = load_scene(path);
+    run(s, "pile_bad", 1);
+    ADD_FAILURE() << "accepted: " << must_contain;
+  } catch (const InputError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find(path), std::string::npos) << m;
+    EXPECT_NE(m.find(must_contain), std::string::npos) << m;
+  }
+}
+
+std::string replace(std::string s, const std::string& from, const std::string& to) {
+  const auto at = s.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  return s.replace(at, from.size(), to);
+}
+
+TEST(GranularRun, BadInputIsNamed) {
+  expect_input_error(replace(kPile, "count: 40", "count: 4000"), "dem.packs[0]");
+  expect_input_error(replace(kPile, "{shape: rock, count", "{shape: pebble, count"),
+                     "dem.packs[0].shape");
+  expect_input_error(replace(kPile, "{kn: 2000, restitution: 0.3, friction: 0.5}\n  grain_wall",
+                             "{restitution: 0.3, friction: 0.5}\n  grain_wall"),
+                     "dem.grain_grain");
+  expect_input_error(replace(kPile, "    - {solid: box}", "    - {solid: lid}"),
+                     "dem.walls[0].solid");
+  expect_input_error(replace(kPile, "restitution: 0.3, friction: 0.5}\n  nodes",
+                             "restitution: 1.5, friction: 0.5}\n  nodes"),
+                     "dem.grain_wall.restitution");
+}
+
+}  // namespace
+}  // namespace sphdem
