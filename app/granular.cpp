@@ -294,7 +294,13 @@ RunResult run_granular(const Scene& scene, const RunOptions& opt) {
     ho.z_floor = scene.dem.heap_floor;
     ho.x_min = scene.dem.heap_x_min;
     ho.x_max = scene.dem.heap_x_max;
-    const HeapShape h = measure_heap(node_positions(sys), ho);
+    const std::vector<Vec3> nodes = node_positions(sys);
+    const HeapShape h = measure_heap(nodes, ho);
+    {  // the heap's surface nodes, for plots (app/plot_heap.py)
+      std::ofstream f(opt.out_dir + "/final_nodes.csv");
+      f << std::setprecision(7) << "x,y,z\n";
+      for (const Vec3& x : nodes) f << x.x << "," << x.y << "," << x.z << "\n";
+    }
     log << "heap: repose angle " << h.repose_deg << " deg (plane fit over " << h.columns
         << " columns, rms " << h.fit_rms << " m), height " << h.height << " m, toe at x = " << h.toe
         << " m, run-out from x = " << scene.dem.heap_origin << ": " << h.toe - scene.dem.heap_origin
