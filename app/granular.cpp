@@ -56,7 +56,9 @@ std::vector<Vec3> node_positions(const dem::DemSystem& sys) {
   return out;
 }
 
-void check_grains(const Scene& scene, const dem::DemSystem& sys, Real min_d) {
+}  // namespace
+
+void check_grain_guards(const Scene& scene, const dem::DemSystem& sys, Real min_d) {
   const Real ratio = sys.max_overlap() / min_d;
   if (ratio > scene.dem.overlap_max) {
     std::ostringstream m;
@@ -79,8 +81,6 @@ void check_grains(const Scene& scene, const dem::DemSystem& sys, Real min_d) {
     }
   }
 }
-
-}  // namespace
 
 RunResult run_granular(const Scene& scene, const RunOptions& opt) {
   namespace fs = std::filesystem;
@@ -222,7 +222,7 @@ RunResult run_granular(const Scene& scene, const RunOptions& opt) {
       sys.step(dt);
       ++steps;
       ++step;
-      check_grains(scene, sys, build.min_diameter);
+      check_grain_guards(scene, sys, build.min_diameter);
       const auto now = clock::now();
       const int sig = g_signal;
       const bool by_steps = ck.every_steps > 0 && step % ck.every_steps == 0;

@@ -7,12 +7,17 @@
 
 #include <ostream>
 
+#include "dem/dem_system.hpp"
 #include "scene/scene.hpp"
 #include "simulation.hpp"
 
 namespace sphdem {
 
 bool is_granular(const Scene& scene);  // grains and no fluid blocks
+
+// Stops the run (StabilityError) when a grain overlap exceeds dem.overlap_max of the smallest
+// grain diameter or a grain leaves the domain.
+void check_grain_guards(const Scene& scene, const dem::DemSystem& sys, Real min_diameter);
 RunResult run_granular(const Scene& scene, const RunOptions& opt);
 void check_granular(const Scene& scene, std::ostream& os);
 

@@ -23,7 +23,9 @@
 #include "io/csv_series.hpp"
 #include "io/frames.hpp"
 #include "io/insitu.hpp"
+#include "coupling/grain_boundary.hpp"
 #include "granular.hpp"
+#include "scene/build_dem.hpp"
 #include "run_common.hpp"
 
 namespace sphdem {
@@ -76,11 +78,13 @@ std::array<int, 3> parse_procs(const std::string& s) {
   return p;
 }
 
-std::unique_ptr<SolverBase> make_solver(const Scene& scene, Backend backend, std::ostream& log,
-                                        BuildReport* report, std::shared_ptr<MpiExchange>* exchange,
-                                        std::array<int, 3> procs) {
+std::unique_ptr<SolverBase> make_solver(
+    const Scene& scene, Backend backend, std::ostream& log, BuildReport* report,
+    std::shared_ptr<MpiExchange>* exchange, std::array<int, 3> procs,
+    const std::function<void(ParticleSet<Host>&, BuildReport&)>& prepare) {
   BuildReport rep;
   ParticleSet<Host> ps = build_particles(scene, &rep);
+  if (prepare) prepare(ps, rep);
   if (report) *report = rep;
   const Real c0 = resolve_sound_speed(scene, rep);
   if (rep.fluid == 0)
@@ -94,6 +98,10 @@ std::unique_ptr<SolverBase> make_solver(const Scene& scene, Backend backend, std
                      " ranks, but this run has 1 (start it with mpirun -n " +
                      std::to_string(asked) + ")");
   if (nranks > 1) {
+    if (scene.dem.enabled)
+      throw InputError(scene.source +
+                       ": dem: grains in a fluid run on one rank only for now (this run has " +
+                       std::to_string(nranks) + " ranks)");
     const StepParams p = make_step_params(scene, c0);
     for (int k = 0; k < 3; ++k)
       if (p.grid.periodic[k])
@@ -286,7 +294,26 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
   std::ostringstream slog;
   BuildReport rep;
   std::shared_ptr<MpiExchange> ex;
-  auto solver = make_solver(scene, opt.backend, slog, &rep, &ex, opt.procs);
+  // ---- coupled runs (scene.dem with fluid): grains, their boundary particles, fluid loads ----
+  DemBuild dem;
+  std::unique_ptr<GrainCoupling> coupling;
+  std::function<void(ParticleSet<Host>&, BuildReport&)> prepare;
+  if (scene.dem.enabled) {
+    dem = build_dem(scene, slog);
+    coupling = std::make_unique<GrainCoupling>(*dem.system, scene.sph.dp, boundary_depth(scene),
+                                               scene.fluid.rho0, scene.dim);
+    prepare = [&](ParticleSet<Host>& ps, BuildReport& br) {
+      br.fluid -= coupling->append(ps, *dem.system);
+      br.grain = coupling->particle_count();
+    };
+  }
+  auto solver = make_solver(scene, opt.backend, slog, &rep, &ex, opt.procs, prepare);
+  std::vector<Vec3> grain_force, grain_torque;
+  if (coupling) {
+    slog << "grains: " << dem.system->bodies().size() << " in the fluid, "
+         << coupling->particle_count() << " grain boundary particles; DEM step " << dem.dt
+         << " s, sub-cycled within each fluid step\n";
+  }
   MPI_Comm comm = ex ? ex->comm() : MPI_COMM_SELF;
   // What this rank writes (checkpoints, frames), and what rank 0 evaluates diagnostics on.
   // Calls f with this rank's share (one rank: the solver's particles, without a copy).
@@ -312,6 +339,16 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
   if (restarting) {
     CheckpointData cp = read_checkpoint(restart_file);
     check_checkpoint_matches(cp, scene, rep.wall + rep.grain, restart_file);
+    if (coupling) {
+      if (cp.dem.bodies.empty())
+        throw InputError(restart_file + ": holds no grains; it is not a checkpoint of '" +
+                         scene.name + "'");
+      try {
+        dem.system->restore(cp.dem);
+      } catch (const InputError& e) {
+        throw InputError(restart_file + ": " + e.what());
+      }
+    }
     if (ex) distribute_after_read(*ex, cp.particles);
     next_diag = cp.next_output_time;
     profile_state = cp.profile_next;
@@ -327,7 +364,27 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
   r.space = solver->space_name();
   DiagnosticWriter diag(scene, opt.out_dir, restarting, root);
   diag.set_profile_state(profile_state);
+  std::unique_ptr<std::ofstream> bodies_csv;
+  if (coupling) {
+    bodies_csv = std::make_unique<std::ofstream>(opt.out_dir + "/bodies.csv",
+                                                 restarting ? std::ios::app : std::ios::trunc);
+    *bodies_csv << std::setprecision(10);
+    if (!restarting) *bodies_csv << "t,id,x,y,z,vx,vy,vz,wx,wy,wz,fx,fy,fz,tx,ty,tz\n";
+  }
   auto write_diagnostics = [&]() {
+    if (coupling) {  // each grain's state and the fluid's force and torque on it
+      const auto& bodies = dem.system->bodies();
+      for (std::size_t i = 0; i < bodies.size(); ++i) {
+        const dem::RigidBody& b = bodies[i];
+        const Vec3 w = dem::world_omega(b);
+        const Vec3 f = i < grain_force.size() ? grain_force[i] : Vec3();
+        const Vec3 t = i < grain_torque.size() ? grain_torque[i] : Vec3();
+        *bodies_csv << solver->time() << "," << b.id << "," << b.x.x << "," << b.x.y << "," << b.x.z
+                    << "," << b.v.x << "," << b.v.y << "," << b.v.z << "," << w.x << "," << w.y
+                    << "," << w.z << "," << f.x << "," << f.y << "," << f.z << "," << t.x << ","
+                    << t.y << "," << t.z << "\n";
+      }
+    }
     if (!ex) {
       diag.write(solver->time(), solver->host_particles(), p);
       return;
@@ -357,6 +414,8 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
     cp.scene_yaml = scene.yaml_text;
     cp.dim = scene.dim;
     cp.dp = scene.sph.dp;
+    if (coupling) cp.dem = dem.system->state();
+    if (bodies_csv) bodies_csv->flush();
     const auto t0 = std::chrono::steady_clock::now();
     const std::uint64_t bytes = write_checkpoint(path, cp);
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -403,7 +462,32 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
         with_share([&](const ParticleSet<Host>& sh) {
           insitu->execute(solver->step_count(), solver->time(), sh, p);
         });
+      if (coupling)  // the grain boundary particles take the grains' poses at t^n
+        solver->move_grains([&](ParticleSet<Host>& ps) { coupling->place(ps, *dem.system); });
       const StepStats st = solver->step();
+      if (coupling) {
+        // The fluid's force on each grain at t^n drives the DEM from t^n to t^n + dt, in
+        // sub-steps no longer than the DEM step (contacts between grains and with walls).
+        dem::DemSystem& sys = *dem.system;
+        coupling->loads(solver->host_particles(), sys, grain_force, grain_torque);
+        for (std::size_t i = 0; i < sys.bodies().size(); ++i)
+          sys.set_external(i, grain_force[i], grain_torque[i]);
+        const double want = std::ceil(double(st.dt) / double(dem.dt) - 1e-9);
+        if (want > double(scene.dem.substeps_max))
+          throw StabilityError(
+              "DEM: the fluid step " + std::to_string(st.dt) + " s needs " + std::to_string(want) +
+              " DEM sub-steps of " + std::to_string(dem.dt) +
+              " s, more than dem.substeps_max = " + std::to_string(scene.dem.substeps_max));
+        const int nsub = std::max(1, int(want));
+        const Real h = st.dt / Real(nsub);
+        for (int k = 0; k < nsub; ++k) {
+          for (std::size_t w = 0; w < scene.dem.walls.size(); ++w)
+            sys.walls()[std::size_t(dem.wall_index[w])].velocity =
+                wall_velocity(scene.dem.walls[w], sys.time());
+          sys.step(h);
+        }
+        check_grain_guards(scene, sys, dem.min_diameter);
+      }
       ++steps;
       particle_steps += double(solver->fluid_count());  // no device download
       if (st.removed > 0)

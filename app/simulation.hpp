@@ -3,6 +3,7 @@
 #pragma once
 
 #include <array>
+#include <functional>
 #include <cstdint>
 #include <memory>
 #include <ostream>
@@ -50,10 +51,12 @@ class MpiExchange;
 // says so in `log`). Under mpirun with more than one rank, the domain is decomposed (procs: the
 // process grid, 0 = PETSc chooses), this rank keeps the fluid it owns, and `exchange` receives the
 // decomposition.
-std::unique_ptr<SolverBase> make_solver(const Scene& scene, Backend backend, std::ostream& log,
-                                        BuildReport* report = nullptr,
-                                        std::shared_ptr<MpiExchange>* exchange = nullptr,
-                                        std::array<int, 3> procs = {0, 0, 0});
+// `prepare` (coupled runs) edits the built particles before the solver takes them: it removes
+// the fluid inside grains and appends their boundary particles.
+std::unique_ptr<SolverBase> make_solver(
+    const Scene& scene, Backend backend, std::ostream& log, BuildReport* report = nullptr,
+    std::shared_ptr<MpiExchange>* exchange = nullptr, std::array<int, 3> procs = {0, 0, 0},
+    const std::function<void(ParticleSet<Host>&, BuildReport&)>& prepare = {});
 
 // "2x1x1" or "2,1,1" -> {2, 1, 1}; "" -> {0, 0, 0}. Throws InputError naming --procs.
 std::array<int, 3> parse_procs(const std::string& s);

@@ -832,14 +832,16 @@ void Parser::parse_dem(const Field& f) {
   DemScene& d = scene_->dem;
   d.enabled = true;
   if (dim_ != 3) fail(f, "DEM grains need dimension: 3");
-  MapReader m = map(f, {"grain_grain", "grain_wall", "stiffness_overlap", "nodes_per_contact",
-                        "dt_factor", "overlap_max", "settle", "shapes", "packs", "walls", "heap"});
+  MapReader m = map(
+      f, {"grain_grain", "grain_wall", "stiffness_overlap", "nodes_per_contact", "dt_factor",
+          "overlap_max", "settle", "shapes", "packs", "bodies", "walls", "heap", "substeps_max"});
   d.grain_grain = parse_contact(m.require("grain_grain"), false);
   d.grain_wall = parse_contact(m.require("grain_wall"), true);
   d.stiffness_overlap = m.number("stiffness_overlap", left_open(0, 1), d.stiffness_overlap);
   d.nodes_per_contact = m.number("nodes_per_contact", closed(1, 1e4), d.nodes_per_contact);
   d.dt_factor = m.number("dt_factor", left_open(0, 100), d.dt_factor);
   d.overlap_max = m.number("overlap_max", left_open(0, 1), d.overlap_max);
+  if (auto f_sub = m.find("substeps_max")) d.substeps_max = integer(*f_sub, 1, 1000000);
   if (auto s = m.find("settle")) {
     MapReader sm = map(*s, {"until", "damping"});
     d.settle_until = sm.number("until", closed(0, 1e6));
@@ -909,17 +911,43 @@ void Parser::parse_dem(const Field& f) {
     }
     d.shapes.push_back(std::move(g));
   }
-  for (const Field& item : list(m.require("packs"))) {
+  auto check_shape = [&](const Field& f_shape, const std::string& shape) {
+    if (!shape_names.count(shape)) {
+      std::vector<std::string> names;
+      for (const auto& [n, where] : shape_names) names.push_back(n);
+      fail(f_shape, "no shape named '" + shape + "'; shapes are: " + join(names));
+    }
+  };
+  if (auto bl = m.find("bodies")) {
+    for (const Field& item : list(*bl)) {
+      MapReader bm =
+          map(item, {"shape", "density", "position", "velocity", "axis", "angle_deg", "fixed"});
+      GrainBody b;
+      Field f_shape = bm.require("shape");
+      b.shape = string(f_shape);
+      check_shape(f_shape, b.shape);
+      b.density = bm.number("density", left_open(0, 1e5), b.density);
+      b.position = bm.vec3("position", kCoord);
+      b.velocity = bm.vec3("velocity", closed(-1e3, 1e3), b.velocity);
+      if (auto fa = bm.find("axis")) {
+        b.axis = vec3(*fa, kDirection);
+        check_nonzero(*fa, b.axis);
+      }
+      b.angle_deg = bm.number("angle_deg", closed(-360, 360), b.angle_deg);
+      b.fixed = bm.boolean("fixed", b.fixed);
+      d.bodies.push_back(b);
+    }
+  }
+  if (!m.find("packs") && !m.find("bodies")) m.require("packs");
+  std::vector<Field> pack_items;
+  if (auto pl = m.find("packs")) pack_items = list(*pl);
+  for (const Field& item : pack_items) {
     MapReader pm = map(
         item, {"shape", "count", "density", "lo", "hi", "velocity", "random_orientation", "seed"});
     GrainPack p;
     Field f_shape = pm.require("shape");
     p.shape = string(f_shape);
-    if (!shape_names.count(p.shape)) {
-      std::vector<std::string> names;
-      for (const auto& [n, where] : shape_names) names.push_back(n);
-      fail(f_shape, "no shape named '" + p.shape + "'; shapes are: " + join(names));
-    }
+    check_shape(f_shape, p.shape);
     p.count = pm.integer("count", 1, 100000000, 0);
     if (!pm.find("count")) pm.require("count");
     p.density = pm.number("density", left_open(0, 1e5), p.density);

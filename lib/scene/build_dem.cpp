@@ -168,6 +168,15 @@ DemBuild build_dem(const Scene& scene, std::ostream& log) {
       layer_height = std::max(layer_height, ext.z);
     }
   }
+  for (const GrainBody& gb : d.bodies) {
+    const std::vector<int>& ts = tmpl[shape_index(gb.shape)];
+    const int t = ts.front();
+    out.min_diameter = std::min(out.min_diameter, sys.shape(t).equivalent_diameter());
+    out.max_radius = std::max(out.max_radius, sys.shape(t).bounding_radius());
+    const Quat q = from_axis_angle(gb.axis, gb.angle_deg * Real(M_PI / 180));
+    sys.add_body(t, gb.density, gb.position, q, gb.velocity, Vec3(),
+                 gb.fixed ? dem::Motion::kFixed : dem::Motion::kFree);
+  }
   for (const GrainWall& w : d.walls) {
     const Solid* s = scene.find_solid(w.solid);
     out.wall_index.push_back(sys.add_sdf_wall(s->sdf, wall_velocity(w, 0)));

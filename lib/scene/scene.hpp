@@ -190,6 +190,16 @@ struct GrainPack {
   std::uint32_t seed = 1;
 };
 
+// One grain placed by hand: centroid, orientation (axis-angle) and velocity.
+struct GrainBody {
+  std::string shape;
+  Real density = 1000;
+  Vec3 position, velocity;
+  Vec3 axis{0, 0, 1};
+  Real angle_deg = 0;
+  bool fixed = false;
+};
+
 // A solid used as a DEM wall; moving walls translate at `velocity` for start <= t < stop.
 struct GrainWall {
   std::string solid;
@@ -215,7 +225,9 @@ struct DemScene {
   Real settle_until = 0;
   std::vector<GrainShape> shapes;
   std::vector<GrainPack> packs;
+  std::vector<GrainBody> bodies;
   std::vector<GrainWall> walls;
+  int substeps_max = 1000;  // coupled runs: most DEM sub-steps per fluid step
   // Heap measurement at the end of the run (diagnostics/heap.hpp): floor height, slope fit window
   // in x, and the x from which the run-out is measured (the baffle).
   bool heap = false;

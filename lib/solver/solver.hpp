@@ -3,6 +3,8 @@
 // whether particles live on the host or the device.
 #pragma once
 
+#include <functional>
+
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -63,6 +65,9 @@ class SolverBase {
   // Restart support: the counters, and replacing the whole state (particles and counters).
   virtual SolverCounters counters() const = 0;
   virtual void restore(ParticleSet<Host> particles, const SolverCounters& c) = 0;
+  // SPH-DEM coupling (lib/coupling): `f` moves the grain boundary slots (positions, ghost nodes,
+  // normals, velocities) in host memory; the boundary range is then re-sorted.
+  virtual void move_grains(const std::function<void(ParticleSet<Host>&)>& f) = 0;
 };
 
 // Builds a solver on the host (OpenMP) or the device (CUDA). `particles` come from

@@ -181,6 +181,11 @@ class Solver final : public SolverBase {
   }
 
   std::vector<std::uint8_t> wall_mine() const override { return mine_host_; }
+
+  void move_grains(const std::function<void(ParticleSet<Host>&)>& f) override {
+    on_host([&](ParticleSet<Host>& h) { f(h); });
+    sort_boundary();
+  }
   std::int64_t halo_rebuilds() const override { return rebuilds_; }
 
   double last_pair_count() override {

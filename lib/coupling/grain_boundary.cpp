@@ -1,0 +1,134 @@
+#include "coupling/grain_boundary.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "core/error.hpp"
+#include "geometry/grid_sdf.hpp"
+
+namespace sphdem {
+
+GrainBoundaryShape make_grain_boundary(const dem::GrainTemplate& t, Real dp, Real depth) {
+  GrainBoundaryShape out;
+  const geom::GridSdfView g = t.view();
+  Vec3 hi;
+  for (int a = 0; a < 3; ++a) hi[a] = g.lo[a] + g.spacing * Real(g.n[a] - 1);
+  long i0[3], i1[3];
+  for (int a = 0; a < 3; ++a) {
+    i0[a] = long(std::ceil(g.lo[a] / dp - Real(0.5)));
+    i1[a] = long(std::floor(hi[a] / dp - Real(0.5)));
+  }
+  for (long k = i0[2]; k <= i1[2]; ++k)
+    for (long j = i0[1]; j <= i1[1]; ++j)
+      for (long i = i0[0]; i <= i1[0]; ++i) {
+        const Vec3 x((Real(i) + Real(0.5)) * dp, (Real(j) + Real(0.5)) * dp,
+                     (Real(k) + Real(0.5)) * dp);
+        const Real phi = geom::grid_phi(g, x);
+        if (!(phi < 0 && phi > -depth)) continue;
+        const Vec3 n = geom::grid_normal(g, x);
+        out.pos.push_back(x);
+        out.ghost.push_back(x - n * (Real(2) * phi));
+        out.normal.push_back(n);
+      }
+  return out;
+}
+
+GrainCoupling::GrainCoupling(const dem::DemSystem& sys, Real dp, Real depth, Real rho0, int dim)
+    : mass_(rho0 * std::pow(dp, Real(dim))), rho0_(rho0) {
+  if (dim != 3) throw InputError("grains in a fluid need dimension: 3");
+  int nt = 0;
+  for (const dem::RigidBody& b : sys.bodies()) nt = std::max(nt, b.shape + 1);
+  for (int t = 0; t < nt; ++t) shapes_.push_back(make_grain_boundary(sys.shape(t), dp, depth));
+  for (std::size_t i = 0; i < sys.bodies().size(); ++i) {
+    const GrainBoundaryShape& s = shapes_[std::size_t(sys.bodies()[i].shape)];
+    for (std::size_t k = 0; k < s.pos.size(); ++k) {
+      owner_.push_back(std::uint32_t(i));
+      point_.push_back(std::uint32_t(k));
+    }
+  }
+}
+
+Index GrainCoupling::append(ParticleSet<Host>& ps, const dem::DemSystem& sys) {
+  // Fluid inside a grain goes.
+  std::vector<char> keep(std::size_t(ps.size()), 1);
+  Index removed = 0;
+  for (Index i = 0; i < ps.n_fluid; ++i) {
+    for (const dem::RigidBody& b : sys.bodies()) {
+      const dem::GrainTemplate& t = sys.shape(b.shape);
+      const Vec3 r = ps.pos[std::size_t(i)] - b.x;
+      if (norm2(r) > t.bounding_radius() * t.bounding_radius() * Real(1.5)) continue;
+      if (geom::grid_phi(t.view(), rotate(conjugate(b.q), r)) < 0) {
+        keep[std::size_t(i)] = 0;
+        ++removed;
+        break;
+      }
+    }
+  }
+  GlobalId max_id = 0;
+  for (Index i = 0; i < ps.size(); ++i) max_id = std::max(max_id, ps.id[std::size_t(i)]);
+  first_id_ = max_id + 1;
+  // Compact in place (fluid first, so every later slot moves down by the fluid removed).
+  const Index n_old = ps.size() - removed;
+  ps.for_each_field([&](const char*, auto& f) {
+    Index to = 0;
+    for (Index i = 0; i < ps.size(); ++i)
+      if (keep[std::size_t(i)]) f[std::size_t(to++)] = f[std::size_t(i)];
+  });
+  ps.n_fluid -= removed;
+  ps.resize(n_old + particle_count());
+  ps.n_grain += particle_count();
+  const Index at = n_old;
+  for (Index k = 0; k < particle_count(); ++k) {
+    const std::size_t i = std::size_t(at + k);
+    ps.id[i] = first_id_ + GlobalId(k);
+    ps.mass[i] = mass_;
+    ps.rho[i] = ps.rho_prev[i] = rho0_;
+    ps.press[i] = 0;
+    ps.body[i] = kGrainBodyBase - std::int32_t(owner_[std::size_t(k)]);
+  }
+  place(ps, sys);
+  return removed;
+}
+
+void GrainCoupling::place(ParticleSet<Host>& ps, const dem::DemSystem& sys) const {
+  // The solver sorts walls and grain particles together by cell: grain slots are those whose
+  // body field marks a grain.
+  Index seen = 0;
+  for (Index i = ps.wall_begin(); i < ps.size(); ++i) {
+    if (ps.body[std::size_t(i)] > kGrainBodyBase) continue;
+    const std::size_t k = std::size_t(ps.id[std::size_t(i)] - first_id_);
+    if (k >= owner_.size())
+      throw std::logic_error("GrainCoupling::place: slot " + std::to_string(i) + " has id " +
+                             std::to_string(ps.id[std::size_t(i)]) + ", first grain id " +
+                             std::to_string(first_id_));
+    ++seen;
+    const dem::RigidBody& body = sys.bodies()[owner_[k]];
+    const GrainBoundaryShape& s = shapes_[std::size_t(body.shape)];
+    const std::size_t p = point_[k];
+    const Vec3 x = body.x + rotate(body.q, s.pos[p]);
+    ps.pos[std::size_t(i)] = x;
+    ps.ghost[std::size_t(i)] = body.x + rotate(body.q, s.ghost[p]);
+    ps.normal[std::size_t(i)] = rotate(body.q, s.normal[p]);
+    ps.vel[std::size_t(i)] = dem::point_velocity(body, x);
+  }
+  if (seen != particle_count())
+    throw std::logic_error("GrainCoupling::place: " + std::to_string(seen) + " grain slots for " +
+                           std::to_string(particle_count()) + " particles");
+}
+
+void GrainCoupling::loads(const ParticleSet<Host>& ps, const dem::DemSystem& sys,
+                          std::vector<Vec3>& force, std::vector<Vec3>& torque) const {
+  force.assign(sys.bodies().size(), Vec3());
+  torque.assign(sys.bodies().size(), Vec3());
+  for (Index i = ps.wall_begin(); i < ps.size(); ++i) {
+    if (ps.body[std::size_t(i)] > kGrainBodyBase) continue;
+    const std::uint32_t g = std::uint32_t(kGrainBodyBase - ps.body[std::size_t(i)]);
+    const Vec3 f = ps.acc[std::size_t(i)] * ps.mass[std::size_t(i)];
+    force[g] += f;
+    torque[g] += cross(ps.pos[std::size_t(i)] - sys.bodies()[g].x, f);
+  }
+}
+
+}  // namespace sphdem
