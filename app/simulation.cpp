@@ -616,6 +616,17 @@ void check_scene(const Scene& scene, std::ostream& os) {
   }
   BuildReport rep;
   ParticleSet<Host> ps = build_particles(scene, &rep);
+  std::ostringstream grains;
+  if (scene.dem.enabled) {  // grains in the fluid: their boundary particles replace fluid
+    std::ostringstream blog;
+    DemBuild dem = build_dem(scene, blog);
+    GrainCoupling coupling(*dem.system, scene.sph.dp, boundary_depth(scene), scene.fluid.rho0,
+                           scene.dim);
+    rep.fluid -= coupling.append(ps, *dem.system);
+    rep.grain = coupling.particle_count();
+    grains << blog.str() << "grains: " << dem.system->bodies().size() << ", DEM step " << dem.dt
+           << " s\n";
+  }
   const Real c0 = resolve_sound_speed(scene, rep);
   const StepParams p = make_step_params(scene, c0);
   // Estimated dt: acoustic limit at rest, force limit from gravity, viscous limit.
@@ -637,8 +648,8 @@ void check_scene(const Scene& scene, std::ostream& os) {
   const double per_thread = scene.dim == 3 ? 4e4 : 2.5e5;
   const double cost = double(rep.fluid) * steps / (per_thread * host_thread_count());
   os << "scene '" << scene.name << "' (" << scene.source << "), " << scene.dim << "D\n"
-     << "particles: fluid " << rep.fluid << ", wall boundary " << rep.wall << ", grain boundary "
-     << rep.grain << ", total " << ps.size() << "\n"
+     << grains.str() << "particles: fluid " << rep.fluid << ", wall boundary " << rep.wall
+     << ", grain boundary " << rep.grain << ", total " << ps.size() << "\n"
      << "dp = " << p.dp << " m, h = " << p.h << " m, c0 = " << c0 << " m/s, cells " << p.grid.n[0]
      << " x " << p.grid.n[1] << " x " << p.grid.n[2] << "\n"
      << "memory estimate: " << std::setprecision(3) << mem / 1048576.0 << " MiB\n"
