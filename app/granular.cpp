@@ -41,7 +41,7 @@ ParticleSet<Host> node_particles(const dem::DemSystem& sys) {
       ps.pos[std::size_t(k)] = x;
       ps.vel[std::size_t(k)] = dem::point_velocity(b, x);
       ps.id[std::size_t(k)] = b.id;
-      ps.body[std::size_t(k)] = std::int32_t(i);
+      ps.body[std::size_t(k)] = kGrainBodyBase - std::int32_t(i);
       ps.mass[std::size_t(k)] = b.mass;
       ++k;
     }
@@ -260,7 +260,7 @@ RunResult run_granular(const Scene& scene, const RunOptions& opt) {
         } else {
           std::cout << line.str() << "\n";
         }
-        log.file() << line.str() << "\n";
+        log.file() << line.str() << std::endl;  // flushed: tail -f run.log shows progress
       }
     }
     // The final row and frame only at the end time: a run stopped early (--max-steps, SIGTERM)

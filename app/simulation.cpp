@@ -569,7 +569,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
         } else {
           std::cout << line.str() << "\n";
         }
-        log.file() << line.str() << "\n";
+        log.file() << line.str() << std::endl;  // flushed: tail -f run.log shows progress
       }
     }
     if (!r.interrupted) {

@@ -421,6 +421,13 @@ CheckpointData read_checkpoint(const std::string& path) {
     std::uint64_t sum_local = local_checksum(ps), sum = 0;
     MPI_Allreduce(&sum_local, &sum, 1, MPI_UINT64_T, MPI_SUM, comm);
     if (sum != checksum) fail(path, "checksum mismatch: the file is corrupted");
+    // Walls and grain particles share the boundary block (sorted together by cell): count the
+    // grains of this rank's share by their body field.
+    Index grains = 0;
+    for (Index i = ps.wall_begin(); i < ps.size(); ++i)
+      if (is_grain_body(ps.body[std::size_t(i)])) ++grains;
+    ps.n_wall -= grains;
+    ps.n_grain = grains;
     d.dem = read_dem(f, path, label(path));
   } catch (...) {
     H5Fclose(f);

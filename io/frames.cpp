@@ -29,11 +29,15 @@ struct Selection {
   std::vector<Index> slots;
 };
 
-Selection select(const ParticleSet<Host>& ps, Index begin, Index end, const FrameParams& p,
-                 int dim) {
+// role: 0 any slot of the range, 1 walls only, 2 grains only (boundary slots hold both, sorted
+// together by cell; the body field tells them apart).
+Selection select(const ParticleSet<Host>& ps, Index begin, Index end, const FrameParams& p, int dim,
+                 int role = 0) {
   Selection s;
-  for (Index i = begin; i < end; ++i)
+  for (Index i = begin; i < end; ++i) {
+    if (role != 0 && is_grain_body(ps.body[std::size_t(i)]) != (role == 2)) continue;
     if (in_region(p, ps.pos[i], dim)) s.slots.push_back(i);
+  }
   return s;
 }
 
@@ -73,11 +77,9 @@ void FrameWriter::write(Real time, const ParticleSet<Host>& ps_const) {
   Index grains = ps.n_grain, any_grains = 0;
   MPI_Allreduce(&grains, &any_grains, 1, MPI_INT64_T, MPI_SUM, MPI_COMM_WORLD);
   const int groups = params_.boundary ? (any_grains > 0 ? 3 : 2) : 1;
-  const Index grain_begin = ps.wall_begin() + ps.n_wall;
   for (int g = 0; g < groups; ++g) {
-    const Selection sel = g == 0   ? select(ps, 0, ps.n_fluid, params_, dim_)
-                          : g == 1 ? select(ps, ps.wall_begin(), grain_begin, params_, dim_)
-                                   : select(ps, grain_begin, ps.size(), params_, dim_);
+    const Selection sel = g == 0 ? select(ps, 0, ps.n_fluid, params_, dim_)
+                                 : select(ps, ps.wall_begin(), ps.size(), params_, dim_, g);
     Index local = Index(sel.slots.size()), total = 0, offset = 0;
     MPI_Allreduce(&local, &total, 1, MPI_INT64_T, MPI_SUM, MPI_COMM_WORLD);
     MPI_Exscan(&local, &offset, 1, MPI_INT64_T, MPI_SUM, MPI_COMM_WORLD);

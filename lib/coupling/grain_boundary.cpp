@@ -97,7 +97,7 @@ void GrainCoupling::place(ParticleSet<Host>& ps, const dem::DemSystem& sys) cons
   // body field marks a grain.
   Index seen = 0;
   for (Index i = ps.wall_begin(); i < ps.size(); ++i) {
-    if (ps.body[std::size_t(i)] > kGrainBodyBase) continue;
+    if (!is_grain_body(ps.body[std::size_t(i)])) continue;
     const std::size_t k = std::size_t(ps.id[std::size_t(i)] - first_id_);
     if (k >= owner_.size())
       throw std::logic_error("GrainCoupling::place: slot " + std::to_string(i) + " has id " +
@@ -123,7 +123,7 @@ void GrainCoupling::loads(const ParticleSet<Host>& ps, const dem::DemSystem& sys
   force.assign(sys.bodies().size(), Vec3());
   torque.assign(sys.bodies().size(), Vec3());
   for (Index i = ps.wall_begin(); i < ps.size(); ++i) {
-    if (ps.body[std::size_t(i)] > kGrainBodyBase) continue;
+    if (!is_grain_body(ps.body[std::size_t(i)])) continue;
     const std::uint32_t g = std::uint32_t(kGrainBodyBase - ps.body[std::size_t(i)]);
     const Vec3 f = ps.acc[std::size_t(i)] * ps.mass[std::size_t(i)];
     force[g] += f;

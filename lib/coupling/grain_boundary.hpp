@@ -18,8 +18,6 @@
 
 namespace sphdem {
 
-constexpr std::int32_t kGrainBodyBase = -2;  // body field of grain g's particles: -2 - g
-
 struct GrainBoundaryShape {
   std::vector<Vec3> pos, ghost, normal;  // body frame
 };

@@ -33,12 +33,16 @@ struct Load {
 // for_each on the host space, but a plain loop for short ranges: a parallel region costs more
 // than a few bodies' work, and much more when the cores are shared.
 constexpr Index kSerialBelow = 64;
+// Dynamic schedule: contacts cluster (a pile's bottom grains, numbered first, have them all), so
+// equal static chunks leave one thread idle. Each item writes only its own slot, so the result
+// does not depend on the schedule.
 template <class F>
 void run_each(Index n, const F& f) {
   if (n < kSerialBelow) {
     for (Index i = 0; i < n; ++i) f(i);
   } else {
-    for_each(Host{}, n, f);
+#pragma omp parallel for schedule(dynamic, 16)
+    for (Index i = 0; i < n; ++i) f(i);
   }
 }
 

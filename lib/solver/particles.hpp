@@ -41,6 +41,13 @@ struct ParticleView {
   Vec3* sps_o = nullptr;  // fluid: SPS tau/rho, off-diagonal (xy, xz, yz)
 };
 
+// The body field of grain g's boundary particles is kGrainBodyBase - g. The solver sorts walls
+// and grain particles together by cell, so this field (not the slot) tells them apart.
+constexpr std::int32_t kGrainBodyBase = -2;
+SPHDEM_HD inline bool is_grain_body(std::int32_t body) {
+  return body <= kGrainBodyBase;
+}
+
 template <class Space>
 struct ParticleSet {
   Index n_fluid = 0, n_halo = 0, n_wall = 0, n_grain = 0;
@@ -48,7 +55,7 @@ struct ParticleSet {
   Buffer<GlobalId, Space> id;
   Buffer<Vec3, Space> pos, vel, acc, vel_prev, ghost, normal, vel_bc;
   Buffer<Real, Space> rho, mass, press, drho, rho_prev;
-  Buffer<std::int32_t, Space> body;
+  Buffer<std::int32_t, Space> body;  // fluid -1; wall: solid index; grain g: kGrainBodyBase - g
 
   Index fluid_end() const { return n_fluid + n_halo; }
   Index wall_begin() const { return fluid_end(); }
