@@ -56,7 +56,7 @@ struct BadFile {
 const BadFile kBadFiles[] = {
     {"unknown_top_key.yaml",
      ":5: gravty: unknown key; allowed keys: name, dimension, domain, gravity, fluid, sph, time, "
-     "guards, checkpoint, parallel, frames, insitu, solids, fluid_blocks, diagnostics"},
+     "guards, checkpoint, parallel, frames, insitu, solids, fluid_blocks, diagnostics, dem"},
     {"rheology_bad_model.yaml", ":5: fluid.rheology.model: 'bingham' is not one of newtonian, hbp"},
     {"rheology_needs_laminar.yaml",
      ":6: fluid.rheology.model: hbp needs fluid.viscosity.model: laminar (mu_eff drives the "

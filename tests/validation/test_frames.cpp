@@ -26,7 +26,11 @@ ParticleSet<Host> set_with(Index nf, Index nw, Index ng) {
     ps.id[std::size_t(i)] = GlobalId(i);
     ps.pos[std::size_t(i)] = Vec3(Real(i), 0, Real(0.5) * Real(i));
     ps.vel[std::size_t(i)] = Vec3(Real(i) * 10, 0, 0);
-    ps.body[std::size_t(i)] = i < nf ? -1 : (i < nf + nw ? 0 : 1);
+    // Fluid -1, walls their solid index, grain g kGrainBodyBase - g; walls and grains are
+    // interleaved, as the solver's sort by cell leaves them.
+    const Index b = i - nf;
+    const bool grain = i >= nf && (b % 2 == 1 ? b / 2 < ng : b - ng >= nw);
+    ps.body[std::size_t(i)] = i < nf ? -1 : (grain ? kGrainBodyBase - 1 : 0);
   }
   return ps;
 }
