@@ -83,7 +83,6 @@ void check_grain_guards(const Scene& scene, const dem::DemSystem& sys, Real min_
 }
 
 RunResult run_granular(const Scene& scene, const RunOptions& opt) {
-  namespace fs = std::filesystem;
   if (world_size() > 1)
     throw InputError(scene.source +
                      ": a scene of grains only runs on one rank (the DEM is not decomposed yet); "
@@ -91,16 +90,7 @@ RunResult run_granular(const Scene& scene, const RunOptions& opt) {
   if (opt.backend == Backend::kDevice)
     throw InputError("--backend device: the DEM has no GPU path yet; run '" + scene.name +
                      "' with --backend host or auto");
-  std::error_code ec;
-  fs::create_directories(opt.out_dir, ec);
-  if (ec)
-    throw InputError("--out: cannot create output folder '" + opt.out_dir + "': " + ec.message());
-  std::string restart_file = opt.restart;
-  if (restart_file == "latest") {
-    restart_file = latest_checkpoint(opt.out_dir);
-    if (restart_file.empty())
-      throw InputError("--restart latest: no checkpoint_*.h5 in '" + opt.out_dir + "'");
-  }
+  const std::string restart_file = prepare_output(opt);
   const bool restarting = !restart_file.empty();
   Log log(opt.out_dir + "/run.log", opt.quiet, restarting);
   {

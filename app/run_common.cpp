@@ -1,10 +1,27 @@
 #include "run_common.hpp"
 
+#include "io/checkpoint.hpp"
+
 #include <cmath>
+#include <filesystem>
 #include <iomanip>
 #include <sstream>
 
 namespace sphdem {
+
+std::string prepare_output(const RunOptions& opt) {
+  std::error_code ec;
+  std::filesystem::create_directories(opt.out_dir, ec);
+  if (ec)
+    throw InputError("--out: cannot create output folder '" + opt.out_dir + "': " + ec.message());
+  std::string restart_file = opt.restart;
+  if (restart_file == "latest") {
+    restart_file = latest_checkpoint(opt.out_dir);
+    if (restart_file.empty())
+      throw InputError("--restart latest: no checkpoint_*.h5 in '" + opt.out_dir + "'");
+  }
+  return restart_file;
+}
 
 std::string fmt_duration(double s) {
   std::ostringstream os;

@@ -39,6 +39,11 @@ class Log {
   bool quiet_;
 };
 
+// Creates the output folder and resolves --restart before anything is written there: returns the
+// checkpoint to continue from ("latest": the newest in the folder), or "" for a fresh run.
+// Throws InputError naming --out or --restart.
+std::string prepare_output(const RunOptions& opt);
+
 std::string fmt_duration(double s);
 void write_summary(const std::string& path, const Scene& scene, const RunResult& r);
 

@@ -267,19 +267,7 @@ class DiagnosticWriter {
 
 RunResult run_scene(const Scene& scene, const RunOptions& opt) {
   if (is_granular(scene)) return run_granular(scene, opt);
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  fs::create_directories(opt.out_dir, ec);
-  if (ec)
-    throw InputError("--out: cannot create output folder '" + opt.out_dir + "': " + ec.message());
-
-  // Restart: resolve the file before anything is written to the output folder.
-  std::string restart_file = opt.restart;
-  if (restart_file == "latest") {
-    restart_file = latest_checkpoint(opt.out_dir);
-    if (restart_file.empty())
-      throw InputError("--restart latest: no checkpoint_*.h5 in '" + opt.out_dir + "'");
-  }
+  const std::string restart_file = prepare_output(opt);
   const bool restarting = !restart_file.empty();
   const int rank = world_rank();
   const bool root = rank == 0;
