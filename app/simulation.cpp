@@ -287,6 +287,14 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
   std::unique_ptr<GrainCoupling> coupling;
   std::function<void(ParticleSet<Host>&, BuildReport&)> prepare;
   if (scene.dem.enabled) {
+    // Keys of grain-only runs that a coupled run does not honour are refused, not ignored.
+    if (scene.dem.settle_until > 0)
+      throw InputError(scene.source +
+                       ": dem.settle: the packing drag applies to grain-only runs (no "
+                       "fluid_blocks); grains in a fluid settle through the fluid");
+    if (scene.dem.heap)
+      throw InputError(scene.source +
+                       ": dem.heap: the heap measurement applies to grain-only runs");
     dem = build_dem(scene, slog);
     coupling = std::make_unique<GrainCoupling>(*dem.system, scene.sph.dp, boundary_depth(scene),
                                                scene.fluid.rho0, scene.dim);

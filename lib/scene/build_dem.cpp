@@ -168,7 +168,12 @@ DemBuild build_dem(const Scene& scene, std::ostream& log) {
       layer_height = std::max(layer_height, ext.z);
     }
   }
-  for (const GrainBody& gb : d.bodies) {
+  for (std::size_t k = 0; k < d.bodies.size(); ++k) {
+    const GrainBody& gb = d.bodies[k];
+    for (int a = 0; a < 3; ++a)
+      if (!(gb.position[a] > scene.domain_lo[a] && gb.position[a] < scene.domain_hi[a]))
+        throw InputError(scene.source + ": dem.bodies[" + std::to_string(k) +
+                         "].position: the centroid lies outside the domain");
     const std::vector<int>& ts = tmpl[shape_index(gb.shape)];
     const int t = ts.front();
     out.min_diameter = std::min(out.min_diameter, sys.shape(t).equivalent_diameter());

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "app/simulation.hpp"
+#include "core/error.hpp"
 #include "io/checkpoint.hpp"
 #include "io/scene_yaml.hpp"
 
@@ -145,6 +146,19 @@ TEST(Coupling, NeutrallyBuoyantBoxStaysPut) {
                                       std::pow(row[4] - 0.08, 2)));
   std::printf("neutral box: largest displacement %.5f m over %.2f s\n", drift, body.back()[0]);
   EXPECT_LT(drift, 0.1 * 0.01);  // a tenth of a particle spacing
+}
+
+TEST(Coupling, GrainOnlyKeysAreRefusedNotIgnored) {
+  for (const char* ov : {"dem.settle={until: 1}", "dem.heap={floor: 0}"}) {
+    try {
+      run({ov}, "coupling_refused", 1);
+      ADD_FAILURE() << "accepted " << ov;
+    } catch (const InputError& e) {
+      const std::string m = e.what();
+      EXPECT_NE(m.find(kScene), std::string::npos) << m;
+      EXPECT_NE(m.find(std::string(ov).substr(0, 8)), std::string::npos) << m;
+    }
+  }
 }
 
 TEST(Coupling, RestartContinuesBitIdentically) {

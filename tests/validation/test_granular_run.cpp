@@ -181,6 +181,10 @@ TEST(GranularRun, BadInputIsNamed) {
                      "dem.grain_grain");
   expect_input_error(replace(kPile, "    - {solid: box}", "    - {solid: lid}"),
                      "dem.walls[0].solid");
+  expect_input_error(replace(kPile, "  walls:\n",
+                             "  bodies:\n    - {shape: rock, position: [0.05, "
+                             "0.05, 0.7]}\n  walls:\n"),
+                     "dem.bodies[0].position");
   expect_input_error(replace(kPile, "restitution: 0.3, friction: 0.5}\n  nodes",
                              "restitution: 1.5, friction: 0.5}\n  nodes"),
                      "dem.grain_wall.restitution");
