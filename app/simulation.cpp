@@ -25,6 +25,7 @@
 #include "io/insitu.hpp"
 #include "coupling/grain_boundary.hpp"
 #include "granular.hpp"
+#include "scene/barrier.hpp"
 #include "scene/build_dem.hpp"
 #include "run_common.hpp"
 
@@ -210,6 +211,17 @@ class DiagnosticWriter {
       profile_.emplace_back(path(g.name), Cols{"t", "s", "x", "y", "z_surface"}, append);
     }
     if (d.energy) energy_.open(path("energy"), {"t", "kinetic", "potential", "total"}, append);
+    if (s.barrier.enabled) {
+      Cols c{"t"};
+      for (int k = 1; k <= s.barrier.walls; ++k) {
+        c.push_back("barrier_" + std::to_string(k) + "_fx");
+        c.push_back("barrier_" + std::to_string(k) + "_f");
+      }
+      c.push_back("total_fx");
+      c.push_back("total_f");
+      impact_.open(path("impact_force"), c, append);
+      runup_.open(path("runup"), {"t", "runup", "x", "y"}, append);
+    }
   }
   std::vector<std::int64_t> profile_state() const {
     return std::vector<std::int64_t>(profile_next_.begin(), profile_next_.end());
@@ -253,13 +265,36 @@ class DiagnosticWriter {
       const Energy e = probe_energy(ps, scene_.gravity);
       energy_.row({t, e.kinetic, e.potential, e.kinetic + e.potential});
     }
+    if (scene_.barrier.enabled) write_barrier(t, ps, p);
+  }
+
+  // impact_force.csv: the fluid force on each barrier wall, its component along the channel (x)
+  // and its magnitude, and the row's total; runup.csv: the run-up at the barrier.
+  void write_barrier(Real t, const ParticleSet<Host>& ps, const StepParams& p) {
+    std::vector<double> row{t};
+    Vec3 total;
+    for (int k = 1; k <= scene_.barrier.walls; ++k) {
+      const std::string name = "barrier_" + std::to_string(k);
+      int idx = -1;
+      for (std::size_t s = 0; s < scene_.solids.size(); ++s)
+        if (scene_.solids[s].name == name) idx = int(s);
+      const Vec3 f = probe_solid_force(ps, idx);
+      total += f;
+      row.push_back(f.x);
+      row.push_back(norm(f));
+    }
+    row.push_back(total.x);
+    row.push_back(norm(total));
+    impact_.row(row);
+    const Runup r = barrier_runup(scene_.barrier, ps, p.radius2, p.dp);
+    runup_.row({t, r.height, r.where.x, r.where.y});
   }
 
  private:
   const Scene& scene_;
   std::vector<CsvSeries> pressure_, height_, front_, force_, profile_;
   std::vector<std::size_t> profile_next_;
-  CsvSeries energy_;
+  CsvSeries energy_, impact_, runup_;
 };
 
 // Both to the terminal and to run.log.
@@ -653,6 +688,24 @@ void check_scene(const Scene& scene, std::ostream& os) {
      << ", viscous " << dt_v << "; CFL " << scene.time.cfl << ")\n"
      << "steps to t = " << scene.time.end << " s: about " << std::setprecision(6) << steps << "\n"
      << "rough cost on " << host_thread_count() << " CPU threads: " << fmt_duration(cost) << "\n";
+  if (scene.barrier.enabled) {
+    const Barrier& b = scene.barrier;
+    // Boundary particles of the barrier walls (by body = solid index).
+    std::vector<Index> per_wall(std::size_t(b.walls), 0);
+    for (Index i = ps.wall_begin(); i < ps.size(); ++i) {
+      const std::int32_t body = ps.body[i];
+      if (body < 0) continue;
+      const std::string& name = scene.solids[std::size_t(body)].name;
+      if (name.rfind("barrier_", 0) == 0) ++per_wall[std::size_t(std::stoi(name.substr(8)) - 1)];
+    }
+    Index walls = 0;
+    for (Index n : per_wall) walls += n;
+    os << "barrier: " << (b.preset.empty() ? std::string(1, b.layout) : b.preset) << ", " << b.walls
+       << " walls " << b.width * 1000 << " x " << b.thickness * 1000 << " x " << b.height * 1000
+       << " mm turned " << b.angle_deg << " deg, row at x = " << b.x
+       << " m; effective opening ratio " << std::setprecision(4) << barrier_opening_ratio(b)
+       << " (projected on the cross-channel axis); " << walls << " boundary particles\n";
+  }
 }
 
 }  // namespace sphdem

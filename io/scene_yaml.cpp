@@ -123,6 +123,7 @@
 
 #include "core/error.hpp"
 #include "geometry/sdf.hpp"
+#include "scene/barrier.hpp"
 
 namespace sphdem {
 namespace {
@@ -249,6 +250,10 @@ const EnumTable<GrainShapeType> kGrainShapes = {
     {"polyhedron", GrainShapeType::kPolyhedron},
     {"mesh", GrainShapeType::kMesh}};
 const EnumTable<std::string> kContactLaws = {{"linear", "linear"}, {"hertz", "hertz"}};
+const EnumTable<std::string> kBarrierPresets = {
+    {"P00", "P00"}, {"P30", "P30"}, {"P45", "P45"}, {"V30", "V30"}, {"V45", "V45"}};
+const EnumTable<char> kBarrierLayouts = {{"P", 'P'}, {"V", 'V'}};
+const EnumTable<bool> kBarrierApex = {{"upstream", true}, {"downstream", false}};
 
 enum class ShapeType {
   kBox,
@@ -514,6 +519,7 @@ class Parser {
   void parse_frames(const Field& f);
   void parse_insitu(const Field& f);
   void parse_solids(const Field& f);
+  void parse_barrier(const Field& f);
   void parse_dem(const Field& f);
   ContactParams parse_contact(const Field& f, bool wall) const;
   void parse_fluid_blocks(const Field& f);
@@ -590,10 +596,10 @@ Scene Parser::parse(const YAML::Node& root) {
   Scene s;
   s.source = file_;  // also the base folder of mesh paths
   scene_ = &s;
-  MapReader top =
-      map(Field{root, root.Mark(), ""},
-          {"name", "dimension", "domain", "gravity", "fluid", "sph", "time", "guards", "checkpoint",
-           "parallel", "frames", "insitu", "solids", "fluid_blocks", "diagnostics", "dem"});
+  MapReader top = map(
+      Field{root, root.Mark(), ""},
+      {"name", "dimension", "domain", "gravity", "fluid", "sph", "time", "guards", "checkpoint",
+       "parallel", "frames", "insitu", "solids", "barrier", "fluid_blocks", "diagnostics", "dem"});
   s.name = name(top.require("name"));
   s.dim = dim_ = integer(top.require("dimension"), 2, 3);
   parse_domain(top.require("domain"));
@@ -612,6 +618,7 @@ Scene Parser::parse(const YAML::Node& root) {
   if (auto f = top.find("frames")) parse_frames(*f);
   if (auto f = top.find("insitu")) parse_insitu(*f);
   if (auto f = top.find("solids")) parse_solids(*f);
+  if (auto f = top.find("barrier")) parse_barrier(*f);
   if (auto f = top.find("fluid_blocks")) parse_fluid_blocks(*f);
   if (auto f = top.find("diagnostics")) parse_diagnostics(*f);
   if (auto f = top.find("dem")) parse_dem(*f);
@@ -794,14 +801,64 @@ void Parser::parse_insitu(const Field& f) {
 void Parser::parse_solids(const Field& f) {
   std::map<std::string, std::string> seen;
   for (const Field& item : list(f)) {
-    MapReader m = map(item, {"name", "shape"});
+    MapReader m = map(item, {"name", "shape", "boundary_regions"});
     Field f_name = m.require("name");
     Solid solid;
     solid.name = name(f_name);
     auto [it, fresh] = seen.emplace(solid.name, f_name.path);
     if (!fresh) fail(f_name, "duplicate solid name '" + solid.name + "' (also " + it->second + ")");
     solid.sdf = parse_shape(m.require("shape"));
+    if (auto fr = m.find("boundary_regions")) {
+      for (const Field& r : list(*fr)) {
+        MapReader rm = map(r, {"lo", "hi"});
+        Field f_lo = rm.require("lo");
+        Field f_hi = rm.require("hi");
+        const Vec3 lo = vec3(f_lo, kCoord), hi = vec3(f_hi, kCoord);
+        check_above(f_hi, lo, hi, used_axes(dim_));
+        solid.boundary_regions.emplace_back(lo, hi);
+      }
+      if (solid.boundary_regions.empty())
+        fail(*fr, "an empty list would leave the solid without boundary particles; omit the key");
+    }
     scene_->solids.push_back(std::move(solid));
+  }
+}
+
+void Parser::parse_barrier(const Field& f) {
+  Barrier& b = scene_->barrier;
+  if (dim_ != 3) fail(f, "a barrier needs dimension: 3");
+  MapReader m = map(f, {"preset", "layout", "angle_deg", "walls", "width", "thickness", "height",
+                        "x", "y", "floor_z", "apex", "runup_band"});
+  b.enabled = true;
+  if (auto p = m.find("preset")) {
+    for (const char* k : {"layout", "angle_deg"})
+      if (auto c = m.find(k))
+        fail(*c, std::string("give either preset or ") + k + ", not both (preset " + string(*p) +
+                     " sets layout and angle)");
+    apply_barrier_preset(b, m.enumeration("preset", kBarrierPresets, std::string("P00")));
+  } else {
+    b.layout = m.enumeration("layout", kBarrierLayouts, b.layout);
+    b.angle_deg = m.number("angle_deg", closed(-80, 80), b.angle_deg);
+  }
+  b.walls = m.integer("walls", 1, 1000, b.walls);
+  b.width = m.number("width", kLength, b.width);
+  b.thickness = m.number("thickness", kLength, b.thickness);
+  b.height = m.number("height", kLength, b.height);
+  b.x = m.number("x", kCoord, b.x);
+  if (auto fy = m.find("y")) {
+    std::vector<Field> items = fixed_list(*fy, 2, "numbers");
+    b.y_lo = number(items[0], kCoord);
+    b.y_hi = number(items[1], kCoord);
+    if (!(b.y_hi > b.y_lo)) fail(items[1], "must be above y[0] = " + fmt(b.y_lo));
+  }
+  b.floor_z = m.number("floor_z", kCoord, b.floor_z);
+  b.apex_upstream = m.enumeration("apex", kBarrierApex, b.apex_upstream);
+  b.runup_band = m.number("runup_band", closed(0, kBig), b.runup_band);
+  for (Solid& s : barrier_solids(b)) {
+    if (scene_->find_solid(s.name))
+      fail(f, "the barrier's wall solids are named barrier_1 .. barrier_" +
+                  std::to_string(b.walls) + "; a solid called '" + s.name + "' already exists");
+    scene_->solids.push_back(std::move(s));
   }
 }
 

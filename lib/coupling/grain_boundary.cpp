@@ -110,6 +110,7 @@ void GrainCoupling::place(ParticleSet<Host>& ps, const dem::DemSystem& sys) cons
     const Vec3 x = body.x + rotate(body.q, s.pos[p]);
     ps.pos[std::size_t(i)] = x;
     ps.ghost[std::size_t(i)] = body.x + rotate(body.q, s.ghost[p]);
+    ps.ghost_alt[std::size_t(i)] = ps.ghost[std::size_t(i)];
     ps.normal[std::size_t(i)] = rotate(body.q, s.normal[p]);
     ps.vel[std::size_t(i)] = dem::point_velocity(body, x);
   }

@@ -213,17 +213,14 @@ class UnionSdf : public Sdf {
     return v;
   }
 
-  Vec3 grad(const Vec3& x) const override {
-    Real v = std::numeric_limits<Real>::max();
-    const Sdf* best = parts_.front().get();
-    for (const auto& p : parts_) {
-      const Real pv = p->phi(x);
-      if (pv < v) {
-        v = pv;
-        best = p.get();
-      }
-    }
-    return best->grad(x);
+  Vec3 grad(const Vec3& x) const override { return deepest(x)->grad(x); }
+  // The wet surface of the part that holds x deepest.
+  Real wet_phi(const Vec3& x) const override { return deepest(x)->wet_phi(x); }
+  Vec3 wet_grad(const Vec3& x) const override { return deepest(x)->wet_grad(x); }
+  bool has_dry_faces() const override {
+    for (const auto& p : parts_)
+      if (p->has_dry_faces()) return true;
+    return false;
   }
 
   // The box around all parts' boxes.
@@ -240,6 +237,19 @@ class UnionSdf : public Sdf {
   }
 
  private:
+  const Sdf* deepest(const Vec3& x) const {
+    Real v = std::numeric_limits<Real>::max();
+    const Sdf* best = parts_.front().get();
+    for (const auto& p : parts_) {
+      const Real pv = p->phi(x);
+      if (pv < v) {
+        v = pv;
+        best = p.get();
+      }
+    }
+    return best;
+  }
+
   std::vector<SdfPtr> parts_;
 };
 
@@ -258,6 +268,18 @@ class DifferenceSdf : public Sdf {
   SdfPtr a_, b_;
 };
 
+// A container: the solid a minus the cavity b, whose only wet faces are the cavity's.
+class CavitySdf : public DifferenceSdf {
+ public:
+  CavitySdf(SdfPtr a, SdfPtr b) : DifferenceSdf(a, b), cavity_(std::move(b)) {}
+  Real wet_phi(const Vec3& x) const override { return -cavity_->phi(x); }
+  Vec3 wet_grad(const Vec3& x) const override { return -cavity_->grad(x); }
+  bool has_dry_faces() const override { return true; }
+
+ private:
+  SdfPtr cavity_;
+};
+
 // A body placed by x_world = R x_body + t: phi(x) = body.phi(R^T (x - t)).
 class TransformSdf : public Sdf {
  public:
@@ -266,6 +288,11 @@ class TransformSdf : public Sdf {
 
   Real phi(const Vec3& x) const override { return body_->phi(matvec(rt_, x - t_)); }
   Vec3 grad(const Vec3& x) const override { return matvec(r_, body_->grad(matvec(rt_, x - t_))); }
+  Real wet_phi(const Vec3& x) const override { return body_->wet_phi(matvec(rt_, x - t_)); }
+  Vec3 wet_grad(const Vec3& x) const override {
+    return matvec(r_, body_->wet_grad(matvec(rt_, x - t_)));
+  }
+  bool has_dry_faces() const override { return body_->has_dry_faces(); }
 
   // The box around the 8 transformed corners of the body's box (huge stays huge).
   Aabb bounds() const override {
@@ -380,7 +407,7 @@ SdfPtr make_tank(Vec3 inner_lo, Vec3 inner_hi, Real thickness, bool closed_top) 
     const Vec3 ext = inner_hi - inner_lo;
     cut_hi.z = inner_hi.z + Real(2) * (std::max({ext.x, ext.y, ext.z}) + thickness);
   }
-  return make_difference(make_box(inner_lo - t, outer_hi), make_box(inner_lo, cut_hi));
+  return std::make_shared<CavitySdf>(make_box(inner_lo - t, outer_hi), make_box(inner_lo, cut_hi));
 }
 
 SdfPtr make_union(std::vector<SdfPtr> parts) {

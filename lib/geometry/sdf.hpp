@@ -26,6 +26,15 @@ class Sdf {
   virtual Vec3 grad(const Vec3& x) const;
   // A box that contains the solid (the part with phi <= 0). Half-spaces return a huge box.
   virtual Aabb bounds() const = 0;
+  // Signed distance to the surface the fluid wets, for points inside the solid (phi < 0). It is
+  // phi itself except for shapes with faces no fluid reaches: a tank's outer faces. Boundary
+  // particles are placed by it and their mDBC ghost nodes mirrored through it, so a wall thicker
+  // than half the kernel support does not mirror its back layers out through the dry face (where
+  // they find no fluid and read zero pressure).
+  virtual Real wet_phi(const Vec3& x) const { return phi(x); }
+  virtual Vec3 wet_grad(const Vec3& x) const { return grad(x); }
+  // True if some faces are never wet (wet_phi differs from phi somewhere).
+  virtual bool has_dry_faces() const { return false; }
 };
 
 using SdfPtr = std::shared_ptr<const Sdf>;
@@ -37,6 +46,7 @@ SdfPtr make_slab(Vec3 point, Vec3 normal, Real thickness);  // |dot(x-point,n)| 
 SdfPtr make_cylinder(Vec3 a, Vec3 b, Real radius);          // capped cylinder from a to b
 SdfPtr make_sphere(Vec3 center, Real radius);
 // A tank: the walls of thickness t around the open-topped (or closed, closed_top=true) inner box.
+// Only the inner faces are wet (wet_phi is minus the distance to the inner box).
 SdfPtr make_tank(Vec3 inner_lo, Vec3 inner_hi, Real thickness, bool closed_top);
 
 // Combinations and transforms.

@@ -34,6 +34,67 @@ Real solids_phi(const Scene& scene, const Vec3& x, int* which) {
   return best;
 }
 
+// Below zero inside a solid or behind a container's dry face (outside a tank): the space no fluid
+// reaches from the scene's wet side.
+Real open_phi(const Scene& scene, const Vec3& p) {
+  Real best = Real(1e30);
+  for (const Solid& s : scene.solids) best = std::min(best, s.sdf->wet_phi(p));
+  return best;
+}
+
+// Unit directions to search for an exposed surface: the 26 neighbours of a cube cell (3D) or the
+// 8 of a square in the x-z plane (2D).
+const std::vector<Vec3>& search_directions(int dim) {
+  static const std::vector<Vec3> d3 = [] {
+    std::vector<Vec3> v;
+    for (int i = -1; i <= 1; ++i)
+      for (int j = -1; j <= 1; ++j)
+        for (int k = -1; k <= 1; ++k)
+          if (i || j || k) v.push_back(Vec3(i, j, k) / std::sqrt(Real(i * i + j * j + k * k)));
+    return v;
+  }();
+  static const std::vector<Vec3> d2 = [] {
+    std::vector<Vec3> v;
+    for (int i = -1; i <= 1; ++i)
+      for (int k = -1; k <= 1; ++k)
+        if (i || k) v.push_back(Vec3(i, 0, k) / std::sqrt(Real(i * i + k * k)));
+    return v;
+  }();
+  return dim == 2 ? d2 : d3;
+}
+
+// Distance from x along unit d to open space (open_phi > 0), or `limit` if farther. Steps by the
+// distance to the nearest surface (safe), at least dp/20.
+Real exposure_distance(const Scene& scene, const Vec3& x, const Vec3& d, Real limit) {
+  const Real min_step = scene.sph.dp / Real(20);
+  Real t = 0;
+  for (int it = 0; it < 100000 && t < limit; ++it) {
+    const Real ph = open_phi(scene, x + d * t);
+    if (ph > Real(0)) return t;  // strictly: a face touching another solid is not open
+    t += std::max(-ph, min_step);
+  }
+  return limit;
+}
+
+// The mirror of boundary particle x through its solid's other face, when that face is within
+// `depth` behind it along -n (a thin solid, such as a barrier wall a few dp thick, with fluid on
+// either side); otherwise `ghost` itself. The face is found by marching along -n inside the solid
+// by the distance to the nearest surface (a safe step), at least dp/20.
+Vec3 other_face_ghost(const geom::Sdf& sdf, const Vec3& x, const Vec3& n, Real depth_x, Real depth,
+                      Real dp, const Vec3& ghost) {
+  Real t = depth_x;  // the particle is depth_x inside the near face; start past the midpoint
+  t = std::max(t, Real(0));
+  for (int it = 0; it < 1000 && t < depth; ++it) {
+    const Real ph = sdf.phi(x - n * t);
+    if (ph >= Real(0)) {
+      const Real s = t - ph;  // back to the face
+      return s < depth ? x - n * (Real(2) * s) : ghost;
+    }
+    t += std::max(-ph, dp / Real(20));
+  }
+  return ghost;
+}
+
 template <class F>
 void for_lattice(const Scene& scene, Vec3 lo, Vec3 hi, F&& f) {
   const Real dp = scene.sph.dp;
@@ -83,7 +144,7 @@ ParticleSet<Host> build_particles(const Scene& scene, BuildReport* report) {
 
   // Boundary particles: lattice points in the domain with -depth < phi < 0.
   const Real depth = boundary_depth(scene);
-  std::vector<Vec3> bpos, bghost, bnormal;
+  std::vector<Vec3> bpos, bghost, balt, bnormal;
   std::vector<std::int32_t> bbody;
   // The domain bounds the fluid; walls may lie up to `depth` outside it (non-periodic axes).
   Vec3 lo = scene.domain_lo, hi = scene.domain_hi;
@@ -94,9 +155,14 @@ ParticleSet<Host> build_particles(const Scene& scene, BuildReport* report) {
   }
   for_lattice(scene, lo, hi, [&](const Vec3& x) {
     int which = -1;
-    const Real phi = solids_phi(scene, x, &which);
-    if (!(phi < Real(0) && phi > -depth)) return;
-    Vec3 n = scene.solids[std::size_t(which)].sdf->grad(x);
+    if (!(solids_phi(scene, x, &which) < Real(0))) return;
+    // Depth and mirror from the wet surface (a tank's back layers mirror through its inner face).
+    const Solid& solid = scene.solids[std::size_t(which)];
+    if (!solid.in_boundary_region(x)) return;
+    const geom::Sdf& sdf = *solid.sdf;
+    const Real phi = std::min(sdf.wet_phi(x), Real(0));
+    if (!(phi > -depth)) return;
+    Vec3 n = sdf.wet_grad(x);
     const Real nn = norm(n);
     n = nn > 0 ? n / nn : Vec3(0, 0, 1);
     if (scene.dim == 2) {
@@ -104,8 +170,44 @@ ParticleSet<Host> build_particles(const Scene& scene, BuildReport* report) {
       const Real n2 = norm(n);
       n = n2 > 0 ? n / n2 : Vec3(0, 0, 1);
     }
+    Real depth_x = -phi;
+    // The ghost must land in open space. Where a face of this solid touches another solid (a
+    // barrier wall's foot on the floor, its end against a side wall, two walls side by side) or
+    // the nearest face is a tie that picked such a face, search for the nearest exposed surface.
+    // A junction particle can be near open space on two sides (under a barrier wall's foot:
+    // upstream and downstream); the nearest exposure at 90 degrees or more from the first is its
+    // second ghost, and the solver uses whichever sees more fluid.
+    bool searched = false;
+    Vec3 alt_ghost;
+    if (!(open_phi(scene, x - n * (Real(2) * phi)) > Real(0))) {
+      const auto& dirs = search_directions(scene.dim);
+      std::vector<Real> dist(dirs.size());
+      std::size_t best = dirs.size();
+      for (std::size_t k = 0; k < dirs.size(); ++k) {
+        dist[k] = exposure_distance(scene, x, dirs[k], depth);
+        if (dist[k] < depth && (best == dirs.size() || dist[k] < dist[best])) best = k;
+      }
+      if (best == dirs.size()) return;  // buried: no exposed surface within the kernel support
+      n = dirs[best];
+      depth_x = dist[best];
+      searched = true;
+      alt_ghost = x + n * (Real(2) * depth_x);
+      std::size_t other = dirs.size();
+      for (std::size_t k = 0; k < dirs.size(); ++k)
+        if (dot(dirs[k], n) <= Real(1e-9) && dist[k] < depth &&
+            (other == dirs.size() || dist[k] < dist[other]))
+          other = k;
+      if (other < dirs.size()) alt_ghost = x + dirs[other] * (Real(2) * dist[other]);
+    }
     bpos.push_back(x);
-    bghost.push_back(x - n * (Real(2) * phi));
+    bghost.push_back(x + n * (Real(2) * depth_x));
+    // A container's outer faces are dry: no second ghost there.
+    if (searched)
+      balt.push_back(alt_ghost);
+    else
+      balt.push_back(sdf.has_dry_faces() ? bghost.back()
+                                         : other_face_ghost(sdf, x, n, depth_x, depth, scene.sph.dp,
+                                                            bghost.back()));
     bnormal.push_back(n);
     bbody.push_back(which);
   });
@@ -128,6 +230,7 @@ ParticleSet<Host> build_particles(const Scene& scene, BuildReport* report) {
     ps.id[i] = next_id++;
     ps.pos[i] = bpos[std::size_t(k)];
     ps.ghost[i] = bghost[std::size_t(k)];
+    ps.ghost_alt[i] = balt[std::size_t(k)];
     ps.normal[i] = bnormal[std::size_t(k)];
     ps.body[i] = bbody[std::size_t(k)];
     ps.mass[i] = mass;

@@ -113,9 +113,44 @@ struct InSituParams {
   std::int64_t every_steps = 10;
 };
 
+// A slit-type barrier (seed §4.1, Fig. 17): a row of `walls` rectangular walls standing on the
+// channel floor across a channel running along +x between y_lo and y_hi. Wall k (k = 0..n-1) has
+// its centre at y = y_lo + (k + 1/2) (y_hi - y_lo)/n and is `thickness` along the flow, `width`
+// across it and `height` tall, turned by `angle_deg` about the vertical (z):
+//   P (parallel): every wall turned by +angle, centres on the line x = x;
+//   V: walls left of the centre line turned by +angle, the others by -angle, centres on a V whose
+//      arms make `angle` with the cross-channel direction, apex at the centre wall (x = x), arms
+//      trailing downstream (apex: upstream) or upstream (apex: downstream).
+// The builder adds the walls as solids barrier_1 .. barrier_n (y order); impact_force.csv has the
+// fluid force on each. Presets P00, P30, P45, V30, V45 set layout and angle.
+struct Barrier {
+  bool enabled = false;
+  std::string preset;  // as given, or "" (layout + angle given directly)
+  char layout = 'P';   // 'P' or 'V'
+  Real angle_deg = 0;
+  int walls = 7;
+  Real width = 0.05, thickness = 0.013, height = 0.09;
+  Real x = 0;  // x of the centre wall's centre
+  Real y_lo = 0, y_hi = 0.4;
+  Real floor_z = 0;
+  bool apex_upstream = true;
+  Real runup_band = 0.1;  // run-up is measured from this far upstream of the row to its end
+};
+
 struct Solid {
   std::string name;
   geom::SdfPtr sdf;  // phi < 0 inside the solid
+  // Boundary particles only inside these boxes (none: everywhere). A wall costs particles only
+  // where the flow can reach it; fluid that gets past a trimmed wall still trips the
+  // fluid-inside-a-solid guard, since the SDF is whole.
+  std::vector<std::pair<Vec3, Vec3>> boundary_regions;
+  bool in_boundary_region(const Vec3& x) const {
+    if (boundary_regions.empty()) return true;
+    for (const auto& [lo, hi] : boundary_regions)
+      if (x.x >= lo.x && x.y >= lo.y && x.z >= lo.z && x.x <= hi.x && x.y <= hi.y && x.z <= hi.z)
+        return true;
+    return false;
+  }
 };
 
 struct FluidBlock {
@@ -253,6 +288,7 @@ struct Scene {
   FrameParams frames;
   InSituParams insitu;
   DemScene dem;
+  Barrier barrier;
   std::string yaml_text;  // the resolved scene as YAML, stored in outputs and checkpoints
 
   Real h() const;  // smoothing length

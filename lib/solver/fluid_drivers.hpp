@@ -58,21 +58,38 @@ void update_mdbc(Space s, ParticleView v, NeighborLists nl, StepParams p, Index 
           v.vel_bc[b] = Vec3();
           return;
         }
-        const Vec3 rg = v.ghost[b];
-        MdbcSums sums;
-        for_each_fluid_neighbor(p, nl, v.pos, rg, [&](Index j, const Vec3& r_gj, Real r2) {
-          const Real r = std::sqrt(r2);
-          const Vec3 d = -r_gj;  // r_j - r_G
-          mdbc_accumulate(sums, v.mass[j] / v.rho[j], v.rho[j], v.vel[j], d, kernel_w(p.kernel, r),
-                          kernel_f(p.kernel, r));
-        });
+        auto gather = [&](const Vec3& rg) {
+          MdbcSums sums;
+          for_each_fluid_neighbor(p, nl, v.pos, rg, [&](Index j, const Vec3& r_gj, Real r2) {
+            const Real r = std::sqrt(r2);
+            const Vec3 d = -r_gj;  // r_j - r_G
+            mdbc_accumulate(sums, v.mass[j] / v.rho[j], v.rho[j], v.vel[j], d,
+                            kernel_w(p.kernel, r), kernel_f(p.kernel, r));
+          });
+          return sums;
+        };
+        Vec3 rg = v.ghost[b];
+        Vec3 normal = v.normal[b];
+        MdbcSums sums = gather(rg);
+        // A thin solid (a barrier wall a few dp thick) has fluid on either face: the particle
+        // mirrors through the face whose ghost node sees more fluid.
+        const Vec3 alt = v.ghost_alt[b];
+        if (!(alt.x == rg.x && alt.y == rg.y && alt.z == rg.z)) {
+          const MdbcSums other = gather(alt);
+          if (other.shepard > sums.shepard) {
+            sums = other;
+            rg = alt;
+            normal = -normal;
+          }
+        }
         const Vec3 rb_minus_rg = p.grid.separation(v.pos[b], rg);
-        Real rho_b = mdbc_boundary_density(sums, p.dim, rb_minus_rg, p.eos.rho0, p.mdbc_det_min);
+        Real rho_b =
+            mdbc_boundary_density(sums, p.dim, rb_minus_rg, p.eos.rho0, p.mdbc_det_min, p.kernel.h);
         // Walls push, never pull: a boundary below rho0 would attract the free surface.
         if (rho_b < p.eos.rho0) rho_b = p.eos.rho0;
         v.rho[b] = rho_b;
         v.press[b] = tait_pressure(p.eos, rho_b);
-        v.vel_bc[b] = mdbc_boundary_velocity(sums, v.vel[b], v.normal[b], p.free_slip);
+        v.vel_bc[b] = mdbc_boundary_velocity(sums, v.vel[b], normal, p.free_slip);
       });
 }
 

@@ -31,6 +31,8 @@ struct ParticleView {
   Vec3* vel_prev = nullptr;      // Verlet: velocity at the previous step (n-1)
   Real* rho_prev = nullptr;      // Verlet: density at the previous step (n-1)
   Vec3* ghost = nullptr;         // boundary: mDBC ghost node; fluid: unused
+  Vec3* ghost_alt = nullptr;     // boundary: ghost node through the solid's other face when the
+                                 // solid is thin (both faces within the kernel), else = ghost
   Vec3* normal = nullptr;        // boundary: outward unit normal of the solid; fluid: unused
   Vec3* vel_bc = nullptr;        // boundary: mDBC velocity seen by the viscous term; fluid: unused
   std::int32_t* body = nullptr;  // boundary: solid index; fluid: -1
@@ -53,7 +55,7 @@ struct ParticleSet {
   Index n_fluid = 0, n_halo = 0, n_wall = 0, n_grain = 0;
 
   Buffer<GlobalId, Space> id;
-  Buffer<Vec3, Space> pos, vel, acc, vel_prev, ghost, normal, vel_bc;
+  Buffer<Vec3, Space> pos, vel, acc, vel_prev, ghost, ghost_alt, normal, vel_bc;
   Buffer<Real, Space> rho, mass, press, drho, rho_prev;
   Buffer<std::int32_t, Space> body;  // fluid -1; wall: solid index; grain g: kGrainBodyBase - g
 
@@ -75,6 +77,7 @@ struct ParticleSet {
     f("vel_prev", vel_prev);
     f("rho_prev", rho_prev);
     f("ghost", ghost);
+    f("ghost_alt", ghost_alt);
     f("normal", normal);
     f("vel_bc", vel_bc);
     f("body", body);
@@ -98,6 +101,7 @@ struct ParticleSet {
     v.vel_prev = vel_prev.data();
     v.rho_prev = rho_prev.data();
     v.ghost = ghost.data();
+    v.ghost_alt = ghost_alt.data();
     v.normal = normal.data();
     v.vel_bc = vel_bc.data();
     v.body = body.data();

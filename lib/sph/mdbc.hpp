@@ -52,8 +52,15 @@ SPHDEM_HD inline void mdbc_accumulate(MdbcSums& s, Real v_j, Real rho_j, const V
 // Uses Gaussian elimination with partial pivoting on the (dim+1) system. `det_min` is the
 // relative threshold below which the Shepard fallback is used. Returns rho_fallback when no fluid
 // is near the ghost node.
+//
+// The singularity test is made on the dimensionless system: the unknowns are rho_G and
+// `length` grad rho_G (length = h), so the W rows and the gradW rows have entries of order one.
+// Tested on the dimensional matrix, a ghost node with one-sided support (near a wall, and worse in
+// a corner) has gradW rows of order 1/h and its determinant looked 1e-7 "singular": the corner
+// boundary particles fell back to a Shepard average, read too low a pressure and let the corner
+// fluid particle through the tank's corner.
 SPHDEM_HD inline Real mdbc_boundary_density(const MdbcSums& s, int dim, const Vec3& rb_minus_rg,
-                                            Real rho_fallback, Real det_min) {
+                                            Real rho_fallback, Real det_min, Real length) {
   if (s.shepard <= Real(0)) return rho_fallback;
   // Indices of the unknowns used: rho, d/dx, (d/dy), d/dz.
   int idx[4] = {0, 1, 2, 3};
@@ -64,8 +71,10 @@ SPHDEM_HD inline Real mdbc_boundary_density(const MdbcSums& s, int dim, const Ve
   }
   Real m[4][5];
   for (int r = 0; r < n; ++r) {
-    for (int c = 0; c < n; ++c) m[r][c] = s.a[idx[r]][idx[c]];
-    m[r][n] = s.b[idx[r]];
+    const Real row_scale = r > 0 ? length : Real(1);  // gradW rows times h
+    for (int c = 0; c < n; ++c)
+      m[r][c] = s.a[idx[r]][idx[c]] * row_scale / (c > 0 ? length : Real(1));  // unknown h grad
+    m[r][n] = s.b[idx[r]] * row_scale;
   }
   // Scale-aware singularity test: determinant relative to the product of row norms.
   Real det = 1;
@@ -104,9 +113,9 @@ SPHDEM_HD inline Real mdbc_boundary_density(const MdbcSums& s, int dim, const Ve
   }
   Vec3 grad;
   if (dim == 2) {
-    grad = Vec3(x[1], 0, x[2]);
+    grad = Vec3(x[1], 0, x[2]) / length;
   } else {
-    grad = Vec3(x[1], x[2], x[3]);
+    grad = Vec3(x[1], x[2], x[3]) / length;
   }
   return x[0] + dot(rb_minus_rg, grad);
 }

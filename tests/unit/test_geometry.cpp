@@ -243,6 +243,33 @@ TEST(GeometryTank, ClosedTop) {
   EXPECT_NEAR(tank->bounds().hi.z, 1.1, kTol);
 }
 
+// A tank's wet surface is its inner box: a point in the back half of a wall is measured from the
+// inner face, not from the nearer outer face (whose mirror image holds no fluid), in a wall, a
+// bottom edge and a bottom corner, and through a transform and a union.
+TEST(GeometryTank, WetSurfaceIsTheInnerFace) {
+  const auto tank = geom::make_tank(Vec3(0, 0, 0), Vec3(1, 1, 1), 0.1, false);
+  const Vec3 floor_back(0.5, 0.5, -0.08);
+  EXPECT_NEAR(tank->phi(floor_back), -0.02, kTol);  // nearest face: the dry underside
+  EXPECT_NEAR(tank->wet_phi(floor_back), -0.08, kTol);
+  expect_vec_near(tank->wet_grad(floor_back), Vec3(0, 0, 1), kTol);
+  const Vec3 edge(1.07, 0.5, -0.07);
+  EXPECT_NEAR(tank->wet_phi(edge), -0.07 * std::sqrt(2.0), kTol);
+  expect_vec_near(tank->wet_grad(edge), Vec3(-1, 0, 1) / std::sqrt(2.0), kTol);
+  const Vec3 corner(-0.06, -0.06, -0.06);
+  EXPECT_NEAR(tank->wet_phi(corner), -0.06 * std::sqrt(3.0), kTol);
+  expect_vec_near(tank->wet_grad(corner), Vec3(1, 1, 1) / std::sqrt(3.0), kTol);
+  // Walls near the inner face: wet_phi is phi.
+  EXPECT_NEAR(tank->wet_phi(Vec3(0.5, 0.5, -0.03)), tank->phi(Vec3(0.5, 0.5, -0.03)), kTol);
+  // A plain box has every face wet.
+  const auto box = geom::make_box(Vec3(0, 0, -0.1), Vec3(1, 1, 0));
+  EXPECT_NEAR(box->wet_phi(Vec3(0.5, 0.5, -0.08)), -0.02, kTol);
+  // Shifted by +10 in x and joined with a far box, the tank keeps its wet surface.
+  const auto moved = geom::make_union({geom::make_transform(tank, Vec3(0, 0, 1), 0, Vec3(10, 0, 0)),
+                                       geom::make_box(Vec3(-5, -5, -5), Vec3(-4, -4, -4))});
+  EXPECT_NEAR(moved->wet_phi(floor_back + Vec3(10, 0, 0)), -0.08, kTol);
+  expect_vec_near(moved->wet_grad(corner + Vec3(10, 0, 0)), Vec3(1, 1, 1) / std::sqrt(3.0), kTol);
+}
+
 // ---- grid SDF ----------------------------------------------------------------------------------
 
 std::shared_ptr<geom::GridSdf> sample(Real (*f)(const Vec3&), Vec3 lo, Real h, int n) {

@@ -56,7 +56,8 @@ struct BadFile {
 const BadFile kBadFiles[] = {
     {"unknown_top_key.yaml",
      ":5: gravty: unknown key; allowed keys: name, dimension, domain, gravity, fluid, sph, time, "
-     "guards, checkpoint, parallel, frames, insitu, solids, fluid_blocks, diagnostics, dem"},
+     "guards, checkpoint, parallel, frames, insitu, solids, barrier, fluid_blocks, diagnostics, "
+     "dem"},
     {"rheology_bad_model.yaml", ":5: fluid.rheology.model: 'bingham' is not one of newtonian, hbp"},
     {"rheology_needs_laminar.yaml",
      ":6: fluid.rheology.model: hbp needs fluid.viscosity.model: laminar (mu_eff drives the "
@@ -231,7 +232,8 @@ TEST(SceneYamlBadOverride, GivesExactMessage) {
 
 TEST(SceneYamlInputs, EveryInputParsesAndRoundTrips) {
   int n = 0;
-  for (const auto& e : fs::directory_iterator(std::string(SPHDEM_SOURCE_DIR) + "/inputs")) {
+  for (const auto& e :
+       fs::recursive_directory_iterator(std::string(SPHDEM_SOURCE_DIR) + "/inputs")) {
     if (e.path().extension() != ".yaml") continue;
     ++n;
     const std::string path = e.path().string();
@@ -568,8 +570,8 @@ TEST(SceneYaml, FindSolidAndH) {
   EXPECT_REAL(s.h(), 1.5 * std::sqrt(2.0) * 0.01);
   s.dim = 3;
   EXPECT_REAL(s.h(), 1.5 * std::sqrt(3.0) * 0.01);
-  s.solids.push_back(Solid{"a", nullptr});
-  s.solids.push_back(Solid{"b", nullptr});
+  s.solids.push_back(Solid{"a", nullptr, {}});
+  s.solids.push_back(Solid{"b", nullptr, {}});
   ASSERT_NE(s.find_solid("b"), nullptr);
   EXPECT_EQ(s.find_solid("b")->name, "b");
   EXPECT_EQ(s.find_solid("c"), nullptr);

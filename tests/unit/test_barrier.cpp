@@ -1,0 +1,119 @@
+// Slit-type barrier layouts (seed §4.1, Fig. 17): wall placement, opening ratio, solids.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/error.hpp"
+#include "io/scene_yaml.hpp"
+#include "scene/barrier.hpp"
+
+namespace sphdem {
+namespace {
+
+Barrier preset(const std::string& name) {
+  Barrier b;
+  b.enabled = true;
+  EXPECT_TRUE(apply_barrier_preset(b, name)) << name;
+  b.x = 0.6;
+  return b;
+}
+
+// Seven 50 mm walls across 400 mm: P00 leaves 50 mm open. Turned walls cast a shadow
+// w |cos a| + t |sin a| on the cross-channel axis; with 7 walls on a 400/7 mm pitch that gives the
+// seed's V-type ratios 0.128 (30°) and 0.220 (45°) exactly. The seed's P30 and P45 (0.485,
+// 0.613) are not reproduced by any turn of these walls (docs/STUDIES.md): projected, P30 = V30.
+TEST(Barrier, OpeningRatiosOfThePresets) {
+  const Real w = 0.05, t = 0.013, W = 0.4;
+  auto projected = [&](Real deg) {
+    const Real a = deg * kPi / 180;
+    return 1 - 7 * (w * std::cos(a) + t * std::sin(a)) / W;
+  };
+  EXPECT_NEAR(barrier_opening_ratio(preset("P00")), 0.125, 1e-12);
+  EXPECT_NEAR(barrier_opening_ratio(preset("V30")), projected(30), 1e-12);
+  EXPECT_NEAR(barrier_opening_ratio(preset("V45")), projected(45), 1e-12);
+  EXPECT_NEAR(barrier_opening_ratio(preset("V30")), 0.128, 0.0005);  // the seed's values
+  EXPECT_NEAR(barrier_opening_ratio(preset("V45")), 0.220, 0.0005);
+  EXPECT_NEAR(barrier_opening_ratio(preset("P30")), projected(30), 1e-12);
+  EXPECT_NEAR(barrier_opening_ratio(preset("P45")), projected(45), 1e-12);
+}
+
+// Overlapping shadows are counted once: walls wider than the pitch close the channel, not more.
+TEST(Barrier, OverlappingWallsAreCountedOnce) {
+  Barrier b = preset("P00");
+  b.width = 0.08;  // 7 x 80 mm = 560 mm > 400 mm
+  EXPECT_NEAR(barrier_opening_ratio(b), 0.0, 1e-12);
+  b.walls = 1;
+  b.width = 0.1;
+  EXPECT_NEAR(barrier_opening_ratio(b), 0.75, 1e-12);
+}
+
+TEST(Barrier, WallPlacement) {
+  const Barrier p = preset("P30");
+  const auto pw = barrier_walls(p);
+  ASSERT_EQ(pw.size(), 7u);
+  for (int k = 0; k < 7; ++k) {
+    EXPECT_NEAR(pw[k].center.y, (k + 0.5) * 0.4 / 7, 1e-12);
+    EXPECT_NEAR(pw[k].center.x, 0.6, 1e-12);  // a straight row
+    EXPECT_NEAR(pw[k].angle, kPi / 6, 1e-12);
+  }
+  // V30, apex upstream: the centre wall at x, the others trail downstream along arms at 30°,
+  // turned to lie along their arm (mirror images about the centre line).
+  const auto vw = barrier_walls(preset("V30"));
+  EXPECT_NEAR(vw[3].center.x, 0.6, 1e-12);
+  for (int k = 0; k < 3; ++k) {
+    const Real off = std::abs(vw[k].center.y - 0.2);
+    EXPECT_NEAR(vw[k].center.x, 0.6 + off * std::tan(kPi / 6), 1e-12);
+    EXPECT_NEAR(vw[6 - k].center.x, vw[k].center.x, 1e-12);
+    EXPECT_NEAR(vw[k].angle, -vw[6 - k].angle, 1e-12);
+  }
+  // The solids: a point at each wall's centre, mid-height, is inside; one a wall thickness
+  // upstream of the P00 walls' faces is outside.
+  const auto solids = barrier_solids(preset("P00"));
+  ASSERT_EQ(solids.size(), 7u);
+  EXPECT_EQ(solids[0].name, "barrier_1");
+  EXPECT_EQ(solids[6].name, "barrier_7");
+  for (std::size_t k = 0; k < 7; ++k) {
+    const Vec3 c = barrier_walls(preset("P00"))[k].center + Vec3(0, 0, 0.045);
+    EXPECT_NEAR(solids[k].sdf->phi(c), -0.0065, 1e-12);  // half the thickness
+    EXPECT_NEAR(solids[k].sdf->phi(c - Vec3(0.0065 + 0.013, 0, 0)), 0.013, 1e-12);
+  }
+}
+
+TEST(Barrier, SceneKeysAndErrors) {
+  const std::string base = R"(
+name: b
+dimension: 3
+domain: {lo: [0, 0, 0], hi: [1, 0.4, 0.3]}
+sph: {dp: 0.01}
+time: {end: 0.1}
+)";
+  const Scene s = parse_scene(base + "barrier: {preset: V45, x: 0.5}\n", "b.yaml");
+  ASSERT_TRUE(s.barrier.enabled);
+  EXPECT_EQ(s.barrier.layout, 'V');
+  EXPECT_EQ(s.barrier.angle_deg, 45);
+  ASSERT_EQ(s.solids.size(), 7u);
+  EXPECT_TRUE(s.find_solid("barrier_4"));
+  auto message = [&](const std::string& extra) {
+    try {
+      parse_scene(base + extra, "b.yaml");
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(message("barrier: {preset: P60}\n").find("barrier.preset"), std::string::npos);
+  EXPECT_NE(message("barrier: {preset: P30, angle_deg: 10}\n").find("not both"), std::string::npos);
+  EXPECT_NE(message("barrier: {walls: 0}\n").find("barrier.walls"), std::string::npos);
+  EXPECT_NE(message("barrier: {y: [0.4, 0]}\n").find("must be above"), std::string::npos);
+  EXPECT_NE(message("solids:\n  - {name: barrier_2, shape: {type: box, lo: [0, 0, 0], hi: "
+                    "[1, 1, 1]}}\nbarrier: {preset: P00}\n")
+                .find("already exists"),
+            std::string::npos);
+  EXPECT_NE(message("solids:\n  - {name: w, shape: {type: box, lo: [0, 0, 0], hi: [1, 1, 1]}, "
+                    "boundary_regions: []}\n")
+                .find("boundary_regions"),
+            std::string::npos);
+}
+
+}  // namespace
+}  // namespace sphdem

@@ -1,0 +1,220 @@
+// The slit-barrier flume (issue #6, seed §4.1): the barrier's diagnostics against a case with a
+// known answer, and the shipped flume scene's outputs.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "app/simulation.hpp"
+#include "io/scene_yaml.hpp"
+
+namespace sphdem {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Csv {
+  std::vector<std::string> header;
+  std::vector<std::vector<double>> rows;
+  int col(const std::string& name) const {
+    for (std::size_t i = 0; i < header.size(); ++i)
+      if (header[i] == name) return int(i);
+    return -1;
+  }
+};
+
+Csv read_csv(const std::string& path) {
+  Csv c;
+  std::ifstream f(path);
+  std::string line;
+  std::getline(f, line);
+  std::stringstream hs(line);
+  for (std::string cell; std::getline(hs, cell, ',');) c.header.push_back(cell);
+  while (std::getline(f, line)) {
+    std::vector<double> r;
+    std::stringstream ss(line);
+    for (std::string cell; std::getline(ss, cell, ',');) r.push_back(std::stod(cell));
+    c.rows.push_back(r);
+  }
+  return c;
+}
+
+RunResult run(const Scene& scene, const std::string& out, std::int64_t max_steps = -1) {
+  fs::remove_all(out);
+  RunOptions o;
+  o.out_dir = out;
+  o.backend = Backend::kHost;
+  o.quiet = true;
+  o.handle_signals = false;
+  o.max_steps = max_steps;
+  return run_scene(scene, o);
+}
+
+// Still water held by a closed barrier: three walls, each as wide as the pitch, close a channel
+// 0.15 m wide; water H = 0.1 m deep stands between the channel's upstream end wall (x = 0) and the
+// walls' upstream faces (x = 0.1). The exact thrust on each end of the reservoir is the
+// hydrostatic rho g H^2 W / 2 = 7.358 N. The tank rings acoustically (period 4H/c0 = 0.04 s), so
+// forces are averaged over 0.3 <= t <= 0.5 s.
+//
+// Measured (2026-11-29, h = sqrt(3) dp as in the flume):
+//              upstream end   downstream end   walls alone   vertical / weight
+//   dp = H/8   8.523 N +15.8%  8.523 N          6.559 N -10.9%  -0.03 %
+//   dp = H/16  7.896 N  +7.3%  7.896 N          6.918 N  -6.0%  -0.00 %
+// The thrust converges at first order in dp. The walls alone read less than the whole downstream
+// end: the boundary particles at a junction (wall on floor, wall against side wall) belong to one
+// solid but push on the fluid of both faces, within a kernel (3.5 dp) of the edge.
+// This test runs dp = H/8 (20 s) and pins: the vertical force equals the weight (0.5 %), the two
+// ends balance (0.1 %), their thrust is above hydrostatic by less than 20 %, the walls alone carry
+// between 80 % and 100 % of the hydrostatic thrust, and the middle wall (no side-wall junction)
+// carries at least its share. ClosedBarrierThrustConverges (disabled: 6 min) runs both resolutions.
+struct ThrustResult {
+  double up = 0, down = 0, walls = 0, wall_k[3] = {0, 0, 0}, fz = 0, weight = 0;
+};
+
+std::string closed_barrier_yaml(double dp) {
+  std::ostringstream yaml;
+  yaml << R"(
+name: closed_barrier
+dimension: 3
+domain: {lo: [-0.05, -0.05, -0.05], hi: [0.2, 0.2, 0.25]}
+gravity: [0, 0, -9.81]
+fluid:
+  c0: 10
+  viscosity: {model: artificial, alpha: 0.05}
+  diffusion: {model: fourtakas, delta: 0.1}
+sph: {dp: )"
+       << dp << R"(, h_factor: 1.0, boundary: mdbc}
+time: {end: 0.5, cfl: 0.2, integrator: verlet}
+solids:
+  - name: channel
+    shape: {type: tank, inner_lo: [0, 0, 0], inner_hi: [0.3, 0.15, 0.2], thickness: 0.03}
+barrier: {layout: P, angle_deg: 0, walls: 3, width: 0.05, thickness: 0.0375, height: 0.15,
+          x: 0.11875, y: [0, 0.15]}
+fluid_blocks:
+  - {lo: [0, 0, 0], hi: [0.1, 0.15, 0.1]}
+diagnostics: {every: 0.005, energy: false}
+)";
+  return yaml.str();
+}
+
+ThrustResult closed_barrier_thrust(double dp) {
+  const Scene scene = parse_scene(closed_barrier_yaml(dp), "closed_barrier.yaml");
+  std::ostringstream log;
+  auto solver = make_solver(scene, Backend::kHost, log);
+  const int channel = 0;  // the solids: channel, barrier_1 .. barrier_3
+  ThrustResult r;
+  int n = 0;
+  while (solver->time() < scene.time.end) {
+    solver->step();
+    if (solver->time() < 0.3) continue;
+    const auto& ps = solver->host_particles();
+    for (Index i = ps.wall_begin(); i < ps.size(); ++i) {
+      const double fx = ps.mass[i] * ps.acc[i].x;
+      r.fz += ps.mass[i] * ps.acc[i].z;
+      if (ps.body[i] == channel) {
+        (ps.pos[i].x < 0.05 ? r.up : r.down) += fx;
+      } else {
+        r.down += fx;
+        r.walls += fx;
+        r.wall_k[ps.body[i] - 1] += fx;
+      }
+    }
+    ++n;
+  }
+  EXPECT_GT(n, 100);
+  const auto& ps = solver->host_particles();
+  for (Index i = 0; i < ps.n_fluid; ++i) r.weight += ps.mass[i] * 9.81;
+  for (double* v : {&r.up, &r.down, &r.walls, &r.wall_k[0], &r.wall_k[1], &r.wall_k[2], &r.fz})
+    *v /= std::max(n, 1);
+  r.up = -r.up;  // the thrust on the upstream end wall is along -x
+  r.fz = -r.fz;
+  std::printf(
+      "closed barrier, dp %.5f: upstream end %.4f N, downstream end %.4f N, walls alone %.4f N "
+      "(%.3f %.3f %.3f); vertical %.4f N (weight %.4f N)\n",
+      dp, r.up, r.down, r.walls, r.wall_k[0], r.wall_k[1], r.wall_k[2], r.fz, r.weight);
+  return r;
+}
+
+constexpr double kThrust = 0.5 * 1000 * 9.81 * 0.1 * 0.1 * 0.15;
+
+TEST(Flume, ClosedBarrierCarriesTheHydrostaticThrust) {
+  const ThrustResult r = closed_barrier_thrust(0.0125);
+  EXPECT_NEAR(r.fz, r.weight, 0.005 * r.weight);
+  EXPECT_NEAR(r.up, r.down, 0.001 * r.down);
+  EXPECT_GT(r.down, kThrust);
+  EXPECT_LT(r.down, 1.2 * kThrust);
+  EXPECT_LT(r.walls, kThrust);
+  EXPECT_GT(r.walls, 0.8 * kThrust);
+  EXPECT_GT(r.wall_k[1], r.walls / 3);  // the middle wall has no side-wall junction
+  // Mirror images (to round-off grown over 1,000 steps of a sloshing tank).
+  EXPECT_NEAR(r.wall_k[0], r.wall_k[2], 0.005 * r.wall_k[0]);
+}
+
+TEST(Flume, DISABLED_ClosedBarrierThrustConverges) {
+  const ThrustResult coarse = closed_barrier_thrust(0.0125);
+  const ThrustResult fine = closed_barrier_thrust(0.00625);
+  const double e_coarse = coarse.down / kThrust - 1, e_fine = fine.down / kThrust - 1;
+  EXPECT_LT(std::abs(e_fine), 0.6 * std::abs(e_coarse));
+  EXPECT_LT(std::abs(fine.walls / kThrust - 1), 0.6 * std::abs(coarse.walls / kThrust - 1));
+}
+
+// impact_force.csv: one fx and one magnitude per wall and the totals, total = sum of walls.
+TEST(Flume, ImpactForceCsvSumsTheWalls) {
+  const Scene scene = parse_scene(closed_barrier_yaml(0.0125), "closed_barrier.yaml");
+  const RunResult r = run(scene, "flume_closed", 60);
+  ASSERT_FALSE(r.unstable) << r.failure;
+  const Csv c = read_csv("flume_closed/impact_force.csv");
+  ASSERT_EQ(c.header.size(), 1u + 2 * 3 + 2);
+  EXPECT_EQ(c.header[1], "barrier_1_fx");
+  EXPECT_EQ(c.header[6], "barrier_3_f");
+  const int tot = c.col("total_fx"), totf = c.col("total_f");
+  ASSERT_GE(tot, 0);
+  ASSERT_GE(c.rows.size(), 3u);
+  for (const auto& row : c.rows) {
+    double s = 0;
+    for (int k = 0; k < 3; ++k) {
+      s += row[std::size_t(1 + 2 * k)];
+      EXPECT_GE(row[std::size_t(2 + 2 * k)], std::abs(row[std::size_t(1 + 2 * k)]) - 1e-12);
+    }
+    EXPECT_NEAR(row[std::size_t(tot)], s, 1e-9 * (1 + std::abs(s)));
+    EXPECT_GE(row[std::size_t(totf)], std::abs(s) - 1e-9);
+  }
+  EXPECT_GT(c.rows.back()[std::size_t(tot)], 0.5 * 7.358);  // the water pushes downstream
+}
+
+// The shipped flume (coarsened to dp = 0.01 for a few steps): the outputs a barrier study reads
+// exist with their columns, and the opening ratio is in `sphdem check`.
+TEST(Flume, ShippedSceneWritesTheBarrierOutputs) {
+  const std::string path = std::string(SPHDEM_SOURCE_DIR) + "/inputs/flume/flume.yaml";
+  for (const char* preset : {"P00", "V45"}) {
+    const Scene scene = load_scene(path, {"sph.dp=0.01", std::string("barrier.preset=") + preset,
+                                          "diagnostics.every=0.0001", "frames.every=0"});
+    const std::string out = std::string("flume_") + preset;
+    const RunResult r = run(scene, out, 5);
+    ASSERT_FALSE(r.unstable) << r.failure;
+    const Csv f = read_csv(out + "/impact_force.csv");
+    EXPECT_EQ(f.header.size(), 1u + 2 * 7 + 2);
+    EXPECT_EQ(f.col("barrier_4_fx"), 7);
+    EXPECT_GE(f.rows.size(), 3u);
+    const Csv u = read_csv(out + "/runup.csv");
+    EXPECT_EQ(u.header, (std::vector<std::string>{"t", "runup", "x", "y"}));
+    // At the start the debris is 0.6 m upstream: no force, and the run-up band is dry.
+    for (const auto& row : f.rows) EXPECT_EQ(row[std::size_t(f.col("total_f"))], 0.0);
+    for (const auto& row : u.rows) EXPECT_EQ(row[1], 0.0);
+    EXPECT_TRUE(fs::exists(out + "/front.csv"));
+    std::ostringstream os;
+    check_scene(scene, os);
+    EXPECT_NE(os.str().find(std::string("barrier: ") + preset), std::string::npos) << os.str();
+    EXPECT_NE(os.str().find(preset[0] == 'P' ? "opening ratio 0.125" : "opening ratio 0.2204"),
+              std::string::npos)
+        << os.str();
+  }
+}
+
+}  // namespace
+}  // namespace sphdem
