@@ -204,7 +204,15 @@ class DiagnosticWriter {
       pressure_.emplace_back(path(g.name), Cols{"t", "p"}, append);
     for (const auto& g : d.height_gauges)
       height_.emplace_back(path(g.name), Cols{"t", "h"}, append);
-    for (const auto& g : d.fronts) front_.emplace_back(path(g.name), Cols{"t", "x_front"}, append);
+    for (const auto& g : d.fronts)
+      front_.emplace_back(path(g.name), Cols{"t", "x_front", "speed"}, append);
+    front_prev_.assign(d.fronts.size(), {0.0, 0.0, false});
+    if (!d.velocity_gauges.empty()) {
+      Cols c{"t"};
+      for (const auto& g : d.velocity_gauges)
+        for (const char* q : {"_u", "_depth", "_froude"}) c.push_back(g.name + q);
+      velocity_.open(path("velocity_gauges"), c, append);
+    }
     for (const auto& g : d.forces)
       force_.emplace_back(path(g.name), Cols{"t", "fx", "fy", "fz"}, append);
     for (const auto& g : d.profiles) {
@@ -221,6 +229,10 @@ class DiagnosticWriter {
       c.push_back("total_f");
       impact_.open(path("impact_force"), c, append);
       runup_.open(path("runup"), {"t", "runup", "x", "y"}, append);
+      trap_.open(path("trap"),
+                 {"t", "fluid_mass_upstream", "fluid_mass_downstream", "grains_upstream",
+                  "grains_downstream"},
+                 append);
     }
   }
   std::vector<std::int64_t> profile_state() const {
@@ -239,8 +251,22 @@ class DiagnosticWriter {
       const Real h = probe_surface_height(ps, p, d.height_gauges[i].x, d.height_gauges[i].y);
       height_[i].row({t, std::isfinite(h) ? h : 0.0});
     }
-    for (std::size_t i = 0; i < d.fronts.size(); ++i)
-      front_[i].row({t, probe_front(ps, d.fronts[i].origin, d.fronts[i].direction)});
+    for (std::size_t i = 0; i < d.fronts.size(); ++i) {
+      // Speed: from the previous row of this run (0 on the first row of a run or a restart).
+      const double x = probe_front(ps, d.fronts[i].origin, d.fronts[i].direction);
+      FrontPrev& prev = front_prev_[i];
+      const double speed = prev.valid && t > prev.t ? (x - prev.x) / (t - prev.t) : 0.0;
+      prev = {double(t), x, true};
+      front_[i].row({t, x, speed});
+    }
+    if (!d.velocity_gauges.empty()) {
+      std::vector<double> row{t};
+      for (const auto& g : d.velocity_gauges) {
+        const ChannelFlow c = probe_channel_flow(ps, p, scene_.gravity, g.x, g.y);
+        row.insert(row.end(), {c.u, c.depth, c.froude});
+      }
+      velocity_.row(row);
+    }
     for (std::size_t i = 0; i < d.forces.size(); ++i) {
       int idx = -1;
       for (std::size_t s = 0; s < scene_.solids.size(); ++s)
@@ -288,13 +314,21 @@ class DiagnosticWriter {
     impact_.row(row);
     const Runup r = barrier_runup(scene_.barrier, ps, p.radius2, p.dp);
     runup_.row({t, r.height, r.where.x, r.where.y});
+    const Trap tr = barrier_trap(scene_.barrier, ps);
+    trap_.row({t, tr.fluid_upstream, tr.fluid_downstream, double(tr.grains_upstream),
+               double(tr.grains_downstream)});
   }
 
  private:
   const Scene& scene_;
   std::vector<CsvSeries> pressure_, height_, front_, force_, profile_;
   std::vector<std::size_t> profile_next_;
-  CsvSeries energy_, impact_, runup_;
+  CsvSeries energy_, impact_, runup_, trap_, velocity_;
+  struct FrontPrev {
+    double t, x;
+    bool valid;
+  };
+  std::vector<FrontPrev> front_prev_;
 };
 
 // Both to the terminal and to run.log.

@@ -645,12 +645,13 @@ void Parser::parse_domain(const Field& f) {
 
 void Parser::parse_fluid(const Field& f) {
   FluidParams& p = scene_->fluid;
-  MapReader m =
-      map(f, {"rho0", "c0", "c0_factor", "gamma", "viscosity", "diffusion", "rheology", "sps"});
+  MapReader m = map(f, {"rho0", "c0", "c0_factor", "gamma", "p_min", "viscosity", "diffusion",
+                        "rheology", "sps"});
   p.rho0 = m.number("rho0", left_open(0, 1e5), p.rho0);
   p.c0 = m.number("c0", closed(0, 1e4), p.c0);
   p.c0_factor = m.number("c0_factor", closed(1, 100), p.c0_factor);
   p.gamma = m.number("gamma", closed(1, 10), p.gamma);
+  p.p_min = m.number("p_min", closed(-1e30, 0), p.p_min);
   if (auto v = m.find("viscosity")) {
     MapReader vm = map(*v, {"model", "nu", "alpha"});
     p.viscosity = vm.enumeration("model", kViscosityModels, p.viscosity);
@@ -1171,8 +1172,8 @@ std::string Parser::diagnostic_name(const MapReader& m) {
 
 void Parser::parse_diagnostics(const Field& f) {
   Diagnostics& d = scene_->diagnostics;
-  MapReader m = map(
-      f, {"every", "pressure_gauges", "height_gauges", "fronts", "profiles", "forces", "energy"});
+  MapReader m = map(f, {"every", "pressure_gauges", "height_gauges", "fronts", "profiles", "forces",
+                        "velocity_gauges", "energy"});
   d.every = m.number("every", left_open(0, 1e4), d.every);
   if (auto l = m.find("pressure_gauges")) {
     for (const Field& item : list(*l)) {
@@ -1251,6 +1252,21 @@ void Parser::parse_diagnostics(const Field& f) {
                                      : "solids are: " + join(names)));
       }
       d.forces.push_back(fp);
+    }
+  }
+  if (auto l = m.find("velocity_gauges")) {
+    if (dim_ != 3) fail(*l, "velocity gauges need dimension: 3 (a channel along x)");
+    for (const Field& item : list(*l)) {
+      MapReader g = map(item, {"name", "x", "y"});
+      VelocityGauge vg;
+      vg.name = diagnostic_name(g);
+      Field f_x = g.require("x");
+      vg.x = number(f_x, kCoord);
+      check_in_domain(f_x, vg.x, 0, "");
+      Field f_y = g.require("y");
+      vg.y = number(f_y, kCoord);
+      check_in_domain(f_y, vg.y, 1, "");
+      d.velocity_gauges.push_back(vg);
     }
   }
   d.energy = m.boolean("energy", d.energy);

@@ -21,7 +21,32 @@ Real probe_pressure(const ParticleSet<Host>& ps, const StepParams& p, const Vec3
 }
 
 Real probe_surface_height(const ParticleSet<Host>& ps, const StepParams& p, Real x, Real y) {
-  const Vec3 up = p.g_mag > 0 ? -p.g_hat : Vec3(0, 0, 1);
+  return probe_surface_height(ps, p, x, y, p.g_mag > 0 ? -p.g_hat : Vec3(0, 0, 1));
+}
+
+ChannelFlow probe_channel_flow(const ParticleSet<Host>& ps, const StepParams& p,
+                               const Vec3& gravity, Real x, Real y) {
+  ChannelFlow c;
+  const Real d = probe_surface_height(ps, p, x, y, Vec3(0, 0, 1));
+  if (!std::isfinite(d) || d <= 0) return c;
+  c.depth = d;
+  Real sum = 0;
+  int n = 0;
+  for (Index j = 0; j < ps.n_fluid; ++j) {
+    const Real dx = ps.pos[j].x - x, dy = ps.pos[j].y - y;
+    if (dx * dx + dy * dy < p.h * p.h) {
+      sum += ps.vel[j].x;
+      ++n;
+    }
+  }
+  if (n > 0) c.u = sum / Real(n);
+  const Real g_n = std::abs(gravity.z);
+  if (g_n > 0) c.froude = c.u / std::sqrt(g_n * c.depth);
+  return c;
+}
+
+Real probe_surface_height(const ParticleSet<Host>& ps, const StepParams& p, Real x, Real y,
+                          const Vec3& up) {
   const Vec3 base(x, p.dim == 2 ? Real(0) : y, 0);
   // Particles near the line, and the range of heights to scan.
   std::vector<Index> near;

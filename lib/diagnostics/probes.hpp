@@ -17,6 +17,18 @@ Real probe_pressure(const ParticleSet<Host>& ps, const StepParams& p, const Vec3
 // Free-surface elevation on the vertical (along -g) line through (x, y): the highest point where
 // the fluid kernel sum sum_j V_j W(r - r_j) reaches 1/2. Returns NaN if no fluid is on the line.
 Real probe_surface_height(const ParticleSet<Host>& ps, const StepParams& p, Real x, Real y);
+// The same along a given unit `up` (the bed normal of an inclined channel).
+Real probe_surface_height(const ParticleSet<Host>& ps, const StepParams& p, Real x, Real y,
+                          const Vec3& up);
+
+// Flow at a channel station (the channel along +x, bed z = 0): see VelocityGauge in
+// scene/scene.hpp. depth is the bed-normal kernel-sum surface (0 if dry), u the mean x-velocity of
+// the fluid within h of the line (0 if none), froude u / sqrt(g_n depth) (0 if dry).
+struct ChannelFlow {
+  Real u = 0, depth = 0, froude = 0;
+};
+ChannelFlow probe_channel_flow(const ParticleSet<Host>& ps, const StepParams& p,
+                               const Vec3& gravity, Real x, Real y);
 
 // Largest projection (x_j - origin) . dir over fluid particles (dir is normalised).
 Real probe_front(const ParticleSet<Host>& ps, const Vec3& origin, const Vec3& dir);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 
 #include "core/error.hpp"
 #include "geometry/sdf.hpp"
@@ -75,13 +76,48 @@ Real barrier_opening_ratio(const Barrier& b) {
   return Real(1) - covered / (b.y_hi - b.y_lo);
 }
 
-Runup barrier_runup(const Barrier& b, const ParticleSet<Host>& ps, Real h2, Real dp) {
-  Real x_first = 1e30, x_last = -1e30;
-  const Real reach = Real(0.5) * (b.width + b.thickness);
+namespace {
+
+// The row's extent along x: every wall's footprint lies within [first, last].
+void row_extent(const Barrier& b, Real& x_first, Real& x_last) {
+  x_first = 1e30;
+  x_last = -1e30;
   for (const BarrierWall& w : barrier_walls(b)) {
-    x_first = std::min(x_first, w.center.x - reach);
-    x_last = std::max(x_last, w.center.x + reach);
+    const Real e = Real(0.5) * (b.thickness * std::abs(std::cos(w.angle)) +
+                                b.width * std::abs(std::sin(w.angle)));
+    x_first = std::min(x_first, w.center.x - e);
+    x_last = std::max(x_last, w.center.x + e);
   }
+}
+
+}  // namespace
+
+Trap barrier_trap(const Barrier& b, const ParticleSet<Host>& ps) {
+  Real x_first, x_last;
+  row_extent(b, x_first, x_last);
+  Trap t;
+  for (Index i = 0; i < ps.n_fluid; ++i)
+    (ps.pos[i].x < x_first ? t.fluid_upstream : t.fluid_downstream) += ps.mass[i];
+  std::map<std::int32_t, std::pair<Real, int>> grains;  // body -> (sum x, count)
+  for (Index i = ps.wall_begin(); i < ps.size(); ++i) {
+    if (!is_grain_body(ps.body[i])) continue;
+    auto& g = grains[ps.body[i]];
+    g.first += ps.pos[i].x;
+    ++g.second;
+  }
+  for (const auto& [body, g] : grains) {
+    (void)body;
+    if (g.first / Real(g.second) < x_first)
+      ++t.grains_upstream;
+    else
+      ++t.grains_downstream;
+  }
+  return t;
+}
+
+Runup barrier_runup(const Barrier& b, const ParticleSet<Host>& ps, Real h2, Real dp) {
+  Real x_first, x_last;
+  row_extent(b, x_first, x_last);
   std::vector<Index> band;
   for (Index i = 0; i < ps.n_fluid; ++i) {
     const Vec3& x = ps.pos[i];

@@ -38,4 +38,13 @@ struct Runup {
 };
 Runup barrier_runup(const Barrier& b, const ParticleSet<Host>& ps, Real h2, Real dp);
 
+// What the barrier holds back: fluid mass upstream of the row's upstream-most face and
+// downstream of it (fluid that left the domain is in neither), and the grains whose boundary
+// particles' centroid lies upstream or downstream of that line.
+struct Trap {
+  Real fluid_upstream = 0, fluid_downstream = 0;
+  int grains_upstream = 0, grains_downstream = 0;
+};
+Trap barrier_trap(const Barrier& b, const ParticleSet<Host>& ps);
+
 }  // namespace sphdem

@@ -240,7 +240,7 @@ ParticleSet<Host> build_particles(const Scene& scene, BuildReport* report) {
 
   // Initial density: hydrostatic pressure from each block's surface, through the Tait EOS.
   const Real c0 = resolve_sound_speed(scene, rep);
-  const EosParams e = make_eos(scene.fluid.rho0, c0, scene.fluid.gamma);
+  const EosParams e = make_eos(scene.fluid.rho0, c0, scene.fluid.gamma, scene.fluid.p_min);
   for (Index i = 0; i < ps.n_fluid; ++i) {
     const Real surf = fsurface[std::size_t(i)];
     Real p = 0;

@@ -46,6 +46,7 @@ struct FluidParams {
   Real c0 = 0;          // speed of sound, m/s; 0 = derive from c0_factor * sqrt(g * H_max)
   Real c0_factor = 10;  // c0 = c0_factor * expected max speed when c0 is 0
   Real gamma = 7;       // Tait exponent (Eq. 6)
+  Real p_min = -1e30;   // lowest pressure, Pa (gauge); -1e30 = no limit
   ViscosityModel viscosity = ViscosityModel::kLaminar;
   Real nu = 1e-6;     // laminar kinematic viscosity, m^2/s (Lo-Shao term, Eq. 9)
   Real alpha = 0.01;  // artificial viscosity coefficient (Monaghan)
@@ -182,6 +183,14 @@ struct ForceProbe {
   std::string name;
   std::string solid;
 };
+// Flow at a station (x, y) of a channel along +x with its bed at z = 0: mean fluid velocity along
+// x over the particles within h of the bed-normal line, flow depth (bed-normal kernel-sum
+// surface), and the Froude number u / sqrt(g_n depth) with g_n the bed-normal part of gravity
+// (seed Eq. 27: g cos theta).
+struct VelocityGauge {
+  std::string name;
+  Real x = 0, y = 0;
+};
 
 struct Diagnostics {
   Real every = 0.01;  // simulated seconds between CSV rows
@@ -190,6 +199,7 @@ struct Diagnostics {
   std::vector<FrontTracker> fronts;
   std::vector<ProfileSpec> profiles;
   std::vector<ForceProbe> forces;
+  std::vector<VelocityGauge> velocity_gauges;  // all in velocity_gauges.csv
   bool energy = true;
 };
 

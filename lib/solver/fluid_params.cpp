@@ -13,7 +13,7 @@ StepParams make_step_params(const Scene& scene, Real c0) {
   p.dp = scene.sph.dp;
   p.h = scene.h();
   p.kernel = make_kernel(scene.dim, p.h);
-  p.eos = make_eos(scene.fluid.rho0, c0, scene.fluid.gamma);
+  p.eos = make_eos(scene.fluid.rho0, c0, scene.fluid.gamma, scene.fluid.p_min);
   p.radius2 = Real(4) * p.h * p.h;
   p.eta2 = Real(0.01) * p.h * p.h;
   p.gravity = scene.gravity;

@@ -11,14 +11,19 @@ struct EosParams {
   Real c0 = 10;
   Real gamma = 7;
   Real b = 0;  // rho0 c0^2 / gamma
+  // Lowest pressure the fluid carries (Pa, gauge). A liquid cannot hold much tension: a free
+  // surface flow thinning to a film of one or two particles otherwise reaches large negative
+  // pressures and clumps (tensile instability). Default: no limit.
+  Real p_min = Real(-1e30);
 };
 
-inline EosParams make_eos(Real rho0, Real c0, Real gamma) {
-  return EosParams{rho0, c0, gamma, rho0 * c0 * c0 / gamma};
+inline EosParams make_eos(Real rho0, Real c0, Real gamma, Real p_min = Real(-1e30)) {
+  return EosParams{rho0, c0, gamma, rho0 * c0 * c0 / gamma, p_min};
 }
 
 SPHDEM_HD inline Real tait_pressure(const EosParams& e, Real rho) {
-  return e.b * (std::pow(rho / e.rho0, e.gamma) - Real(1));
+  const Real p = e.b * (std::pow(rho / e.rho0, e.gamma) - Real(1));
+  return p < e.p_min ? e.p_min : p;
 }
 
 // Inverse: the density that gives pressure p.

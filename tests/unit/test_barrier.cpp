@@ -5,7 +5,9 @@
 
 #include "core/error.hpp"
 #include "io/scene_yaml.hpp"
+#include "diagnostics/probes.hpp"
 #include "scene/barrier.hpp"
+#include "solver/fluid_params.hpp"
 
 namespace sphdem {
 namespace {
@@ -113,6 +115,50 @@ time: {end: 0.1}
                     "boundary_regions: []}\n")
                 .find("boundary_regions"),
             std::string::npos);
+}
+
+// A uniform layer D = 0.04 m deep (8 particles of dp = 5 mm) flowing at u = 1.5 m/s down a 15°
+// channel: the gauge reads u exactly, the depth to within dp/4 and Fr = u / sqrt(g cos15 D); the
+// trap counts all the fluid upstream of a row standing downstream of it.
+TEST(Barrier, ChannelFlowGaugeAndTrap) {
+  const Scene scene = parse_scene(R"(
+name: layer
+dimension: 3
+domain: {lo: [0, 0, 0], hi: [0.2, 0.2, 0.2]}
+gravity: [2.5390, 0, -9.4757]
+sph: {dp: 0.005, h_factor: 1.0}
+time: {end: 0.1}
+barrier: {preset: P00, x: 0.3, y: [0, 0.2]}
+)",
+                                  "layer.yaml");
+  const StepParams p = make_step_params(scene, 20);
+  ParticleSet<Host> ps;
+  const Real dp = 0.005;
+  std::vector<Vec3> pos;
+  for (int i = 0; i < 40; ++i)
+    for (int j = 0; j < 40; ++j)
+      for (int k = 0; k < 8; ++k) pos.emplace_back((i + 0.5) * dp, (j + 0.5) * dp, (k + 0.5) * dp);
+  ps.n_fluid = Index(pos.size());
+  ps.resize(ps.size());
+  for (Index i = 0; i < ps.n_fluid; ++i) {
+    ps.pos[i] = pos[std::size_t(i)];
+    ps.vel[i] = Vec3(1.5, 0, 0);
+    ps.mass[i] = 1000 * dp * dp * dp;
+    ps.rho[i] = 1000;
+    ps.body[i] = -1;
+  }
+  const ChannelFlow c = probe_channel_flow(ps, p, scene.gravity, 0.1, 0.1);
+  EXPECT_NEAR(c.u, 1.5, 1e-12);
+  EXPECT_NEAR(c.depth, 0.04, 0.25 * dp);
+  EXPECT_NEAR(c.froude, 1.5 / std::sqrt(9.4757 * c.depth), 1e-12);
+  EXPECT_NEAR(c.froude, 1.5 / std::sqrt(9.4757 * 0.04), 0.05);
+  // Off the layer: dry.
+  const ChannelFlow dry = probe_channel_flow(ps, p, scene.gravity, 0.19, 0.5);
+  EXPECT_EQ(dry.depth, 0);
+  EXPECT_EQ(dry.froude, 0);
+  const Trap t = barrier_trap(scene.barrier, ps);
+  EXPECT_NEAR(t.fluid_upstream, ps.n_fluid * 1000 * dp * dp * dp, 1e-9);
+  EXPECT_EQ(t.fluid_downstream, 0);
 }
 
 }  // namespace

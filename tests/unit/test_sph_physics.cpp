@@ -53,6 +53,15 @@ TEST(SphEos, TaitAndInverse) {
   EXPECT_NEAR(tait_sound_speed(e, 1000), 30, 1e-12);
 }
 
+// fluid.p_min bounds the tension; pressures above it are untouched.
+TEST(SphEos, PressureFloor) {
+  const EosParams e = make_eos(1000, 30, 7, -500);
+  EXPECT_DOUBLE_EQ(tait_pressure(e, 900), -500);
+  EXPECT_NEAR(tait_pressure(e, 1010), 1000 * 900 / 7.0 * (std::pow(1.01, 7) - 1), 1e-6);
+  EXPECT_NEAR(tait_pressure(e, tait_density(e, -200)), -200, 1e-7);
+  EXPECT_LT(tait_pressure(make_eos(1000, 30, 7), 900), -500);  // default: no floor
+}
+
 TEST(SphContinuity, DiffusionRaisesTheLowerDensity) {
   const KernelParams k = make_kernel(2, 0.01);
   const EosParams e = make_eos(1000, 20, 7);

@@ -206,7 +206,18 @@ TEST(Flume, ShippedSceneWritesTheBarrierOutputs) {
     // At the start the debris is 0.6 m upstream: no force, and the run-up band is dry.
     for (const auto& row : f.rows) EXPECT_EQ(row[std::size_t(f.col("total_f"))], 0.0);
     for (const auto& row : u.rows) EXPECT_EQ(row[1], 0.0);
-    EXPECT_TRUE(fs::exists(out + "/front.csv"));
+    const Csv fr = read_csv(out + "/front.csv");
+    EXPECT_EQ(fr.header, (std::vector<std::string>{"t", "x_front", "speed"}));
+    const Csv v = read_csv(out + "/velocity_gauges.csv");
+    EXPECT_EQ(v.header, (std::vector<std::string>{"t", "g1_u", "g1_depth", "g1_froude", "g2_u",
+                                                  "g2_depth", "g2_froude"}));
+    for (const auto& row : v.rows) EXPECT_EQ(row[2], 0.0);  // the debris has not got there
+    // All 4.5 kg of debris is upstream of the barrier (to the lattice's rounding: 3200 particles
+    // of 1300 dp^3 = 4.16 kg at dp = 0.01, the block being 4.3 layers deep).
+    const Csv tr = read_csv(out + "/trap.csv");
+    ASSERT_FALSE(tr.rows.empty());
+    EXPECT_NEAR(tr.rows.back()[1], r.fluid * 1300 * 1e-6, 1e-9);
+    EXPECT_EQ(tr.rows.back()[2], 0.0);
     std::ostringstream os;
     check_scene(scene, os);
     EXPECT_NE(os.str().find(std::string("barrier: ") + preset), std::string::npos) << os.str();

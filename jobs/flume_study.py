@@ -1,0 +1,151 @@
+#!/usr/bin/env python3
+"""Barrier-arrangement study on the slit-barrier flume (issue #6, seed §5.2): runs
+inputs/flume/flume.yaml once per preset, then writes OUT/summary.csv and OUT/summary.md with, per
+case, the opening ratio (from `sphdem check`), the peak force on the middle wall and its time, the
+final (static) force, the largest run-up and the trap ratio, and draws OUT/force.png (middle-wall
+force against time, every case on one axis) and OUT/profiles.png (centreline surface at the
+profile time).
+
+  python3 jobs/flume_study.py --out runs/flume_study [--presets P00 P30 P45 V30 V45]
+      [--sphdem build/sphdem] [--set sph.dp=0.01 --set time.end=1.2 ...] [--summarize-only]
+
+Each run goes to OUT/<preset>/ and is skipped if OUT/<preset>/summary.json says it completed
+(so an interrupted study continues). Extra --set options apply to every case.
+"""
+import argparse
+import csv
+import json
+import os
+import re
+import subprocess
+import sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+SCENE = os.path.join(ROOT, "inputs", "flume", "flume.yaml")
+
+
+def read_csv(path):
+    with open(path) as f:
+        rows = list(csv.reader(f))
+    header = rows[0]
+    return header, [[float(v) for v in r] for r in rows[1:] if r]
+
+
+def opening_ratio(sphdem, preset, sets):
+    cmd = [sphdem, "check", SCENE, "--set", "barrier.preset=" + preset]
+    for s in sets:
+        cmd += ["--set", s]
+    out = subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
+    m = re.search(r"effective opening ratio ([0-9.]+)", out)
+    return float(m.group(1)) if m else float("nan")
+
+
+def finished(run_dir):
+    try:
+        with open(os.path.join(run_dir, "summary.json")) as f:
+            return json.load(f).get("status") == "completed"
+    except (OSError, ValueError):
+        return False
+
+
+def summarize(run_dir):
+    """Numbers of one case from its CSV files."""
+    h, rows = read_csv(os.path.join(run_dir, "impact_force.csv"))
+    walls = sum(1 for c in h if c.endswith("_fx") and c.startswith("barrier_"))
+    mid = h.index("barrier_%d_fx" % ((walls + 1) // 2))
+    t = [r[0] for r in rows]
+    f_mid = [r[mid] for r in rows]
+    k = max(range(len(rows)), key=lambda i: f_mid[i]) if rows else 0
+    # Static force: mean over the last 10 % of the run.
+    tail = [f for ti, f in zip(t, f_mid) if ti >= t[-1] - 0.1 * (t[-1] - t[0])] if rows else []
+    _, ru = read_csv(os.path.join(run_dir, "runup.csv"))
+    trap = os.path.join(run_dir, "trap.csv")
+    _, tr = read_csv(trap) if os.path.exists(trap) else ([], [])
+    up, down = (tr[-1][1], tr[-1][2]) if tr else (0.0, 0.0)
+    return {
+        "t_end": t[-1] if t else 0.0,
+        "peak_force_mid": f_mid[k] if rows else 0.0,
+        "t_peak": t[k] if rows else 0.0,
+        "static_force_mid": sum(tail) / len(tail) if tail else 0.0,
+        "max_runup": max((r[1] for r in ru), default=0.0),
+        "trap_ratio": up / (up + down) if up + down > 0 else float("nan"),
+        "series": (t, f_mid),
+    }
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
+    ap.add_argument("--out", required=True)
+    ap.add_argument("--presets", nargs="+", default=["P00", "P30", "P45", "V30", "V45"])
+    ap.add_argument("--sphdem", default=os.path.join(ROOT, "build", "sphdem"))
+    ap.add_argument("--set", dest="sets", action="append", default=[])
+    ap.add_argument("--summarize-only", action="store_true")
+    a = ap.parse_args()
+    os.makedirs(a.out, exist_ok=True)
+    results = []
+    for p in a.presets:
+        run_dir = os.path.join(a.out, p)
+        if not a.summarize_only and not finished(run_dir):
+            cmd = [a.sphdem, "run", SCENE, "--out", run_dir, "--set", "barrier.preset=" + p]
+            for s in a.sets:
+                cmd += ["--set", s]
+            print(" ".join(cmd), flush=True)
+            rc = subprocess.run(cmd).returncode
+            if rc != 0:
+                print("case %s stopped (exit %d): see %s/run.log" % (p, rc, run_dir), flush=True)
+        if not os.path.exists(os.path.join(run_dir, "impact_force.csv")):
+            continue
+        r = summarize(run_dir)
+        r["preset"] = p
+        r["opening_ratio"] = opening_ratio(a.sphdem, p, a.sets)
+        r["finished"] = finished(run_dir)
+        results.append(r)
+    cols = ["preset", "opening_ratio", "peak_force_mid", "t_peak", "static_force_mid",
+            "max_runup", "trap_ratio", "t_end", "finished"]
+    with open(os.path.join(a.out, "summary.csv"), "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(cols)
+        for r in results:
+            w.writerow([r[c] for c in cols])
+    with open(os.path.join(a.out, "summary.md"), "w") as f:
+        f.write("| " + " | ".join(cols) + " |\n|" + "---|" * len(cols) + "\n")
+        for r in results:
+            f.write("| " + " | ".join(
+                "%.4g" % r[c] if isinstance(r[c], float) else str(r[c]) for c in cols) + " |\n")
+    print(open(os.path.join(a.out, "summary.md")).read())
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        print("matplotlib missing: no plots (apt-get install python3-matplotlib)", file=sys.stderr)
+        return
+    fig, ax = plt.subplots(figsize=(7, 4))
+    for r in results:
+        ax.plot(*r["series"], label="%s (opening %.3f)" % (r["preset"], r["opening_ratio"]))
+    ax.set_xlabel("t (s)")
+    ax.set_ylabel("force on the middle wall along the channel (N)")
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(os.path.join(a.out, "force.png"), dpi=120)
+    fig, ax = plt.subplots(figsize=(7, 4))
+    for r in results:
+        path = os.path.join(a.out, r["preset"], "runup_profile.csv")
+        if not os.path.exists(path):
+            continue
+        _, rows = read_csv(path)  # t, s, x, y, z_surface
+        if not rows:
+            continue
+        t0 = rows[0][0]
+        ax.plot([q[2] for q in rows if q[0] == t0], [q[4] for q in rows if q[0] == t0],
+                label="%s, t = %.2f s" % (r["preset"], t0))
+    ax.set_xlabel("x along the channel (m)")
+    ax.set_ylabel("surface elevation (m)")
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(os.path.join(a.out, "profiles.png"), dpi=120)
+
+
+if __name__ == "__main__":
+    main()
