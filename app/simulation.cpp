@@ -726,11 +726,14 @@ void check_scene(const Scene& scene, std::ostream& os) {
     const Barrier& b = scene.barrier;
     // Boundary particles of the barrier walls (by body = solid index).
     std::vector<Index> per_wall(std::size_t(b.walls), 0);
+    std::vector<int> wall_of_solid(scene.solids.size(), -1);
+    for (int k = 0; k < b.walls; ++k)
+      for (std::size_t s = 0; s < scene.solids.size(); ++s)
+        if (scene.solids[s].name == "barrier_" + std::to_string(k + 1)) wall_of_solid[s] = k;
     for (Index i = ps.wall_begin(); i < ps.size(); ++i) {
       const std::int32_t body = ps.body[i];
-      if (body < 0) continue;
-      const std::string& name = scene.solids[std::size_t(body)].name;
-      if (name.rfind("barrier_", 0) == 0) ++per_wall[std::size_t(std::stoi(name.substr(8)) - 1)];
+      if (body >= 0 && wall_of_solid[std::size_t(body)] >= 0)
+        ++per_wall[std::size_t(wall_of_solid[std::size_t(body)])];
     }
     Index walls = 0;
     for (Index n : per_wall) walls += n;

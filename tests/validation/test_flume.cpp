@@ -227,5 +227,25 @@ TEST(Flume, ShippedSceneWritesTheBarrierOutputs) {
   }
 }
 
+// A user solid whose name starts like the barrier's (barrier_side) is not taken for a wall.
+TEST(Flume, CheckCountsOnlyTheBarrierWalls) {
+  const Scene scene = parse_scene(R"(
+name: names
+dimension: 3
+domain: {lo: [0, 0, 0], hi: [0.3, 0.4, 0.15]}
+sph: {dp: 0.01}
+time: {end: 0.1}
+solids:
+  - {name: barrier_side, shape: {type: box, lo: [0, -0.05, 0], hi: [0.3, 0, 0.15]}}
+barrier: {preset: P00, x: 0.15, y: [0, 0.4]}
+fluid_blocks:
+  - {lo: [0, 0, 0], hi: [0.05, 0.4, 0.05]}
+)",
+                                  "names.yaml");
+  std::ostringstream os;
+  ASSERT_NO_THROW(check_scene(scene, os));
+  EXPECT_NE(os.str().find("opening ratio 0.125"), std::string::npos) << os.str();
+}
+
 }  // namespace
 }  // namespace sphdem
