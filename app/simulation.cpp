@@ -204,9 +204,7 @@ class DiagnosticWriter {
       pressure_.emplace_back(path(g.name), Cols{"t", "p"}, append);
     for (const auto& g : d.height_gauges)
       height_.emplace_back(path(g.name), Cols{"t", "h"}, append);
-    for (const auto& g : d.fronts)
-      front_.emplace_back(path(g.name), Cols{"t", "x_front", "speed"}, append);
-    front_prev_.assign(d.fronts.size(), {0.0, 0.0, false});
+    for (const auto& g : d.fronts) front_.emplace_back(path(g.name), Cols{"t", "x_front"}, append);
     if (!d.velocity_gauges.empty()) {
       Cols c{"t"};
       for (const auto& g : d.velocity_gauges)
@@ -251,14 +249,8 @@ class DiagnosticWriter {
       const Real h = probe_surface_height(ps, p, d.height_gauges[i].x, d.height_gauges[i].y);
       height_[i].row({t, std::isfinite(h) ? h : 0.0});
     }
-    for (std::size_t i = 0; i < d.fronts.size(); ++i) {
-      // Speed: from the previous row of this run (0 on the first row of a run or a restart).
-      const double x = probe_front(ps, d.fronts[i].origin, d.fronts[i].direction);
-      FrontPrev& prev = front_prev_[i];
-      const double speed = prev.valid && t > prev.t ? (x - prev.x) / (t - prev.t) : 0.0;
-      prev = {double(t), x, true};
-      front_[i].row({t, x, speed});
-    }
+    for (std::size_t i = 0; i < d.fronts.size(); ++i)
+      front_[i].row({t, probe_front(ps, d.fronts[i].origin, d.fronts[i].direction)});
     if (!d.velocity_gauges.empty()) {
       std::vector<double> row{t};
       for (const auto& g : d.velocity_gauges) {
@@ -324,11 +316,6 @@ class DiagnosticWriter {
   std::vector<CsvSeries> pressure_, height_, front_, force_, profile_;
   std::vector<std::size_t> profile_next_;
   CsvSeries energy_, impact_, runup_, trap_, velocity_;
-  struct FrontPrev {
-    double t, x;
-    bool valid;
-  };
-  std::vector<FrontPrev> front_prev_;
 };
 
 // Both to the terminal and to run.log.

@@ -2,9 +2,9 @@
 """Barrier-arrangement study on the slit-barrier flume (issue #6, seed §5.2): runs
 inputs/flume/flume.yaml once per preset, then writes OUT/summary.csv and OUT/summary.md with, per
 case, the opening ratio (from `sphdem check`), the peak force on the middle wall and its time, the
-final (static) force, the largest run-up and the trap ratio, and draws OUT/force.png (middle-wall
-force against time, every case on one axis) and OUT/profiles.png (centreline surface at the
-profile time).
+final (static) force, the largest run-up, the trap ratio and the largest front speed (over 0.05 s
+windows of front.csv), and draws OUT/force.png (middle-wall force against time, every case on one
+axis) and OUT/profiles.png (centreline surface at the profile time).
 
   python3 jobs/flume_study.py --out runs/flume_study [--presets P00 P30 P45 V30 V45]
       [--sphdem build/sphdem] [--set sph.dp=0.01 --set time.end=1.2 ...] [--summarize-only]
@@ -63,7 +63,19 @@ def summarize(run_dir):
     trap = os.path.join(run_dir, "trap.csv")
     _, tr = read_csv(trap) if os.path.exists(trap) else ([], [])
     up, down = (tr[-1][1], tr[-1][2]) if tr else (0.0, 0.0)
+    # Front speed: the largest over 0.05 s windows of front.csv (its rows are every diagnostics.every).
+    speed = 0.0
+    fpath = os.path.join(run_dir, "front.csv")
+    if os.path.exists(fpath):
+        _, fr = read_csv(fpath)
+        j = 0
+        for i in range(len(fr)):
+            while fr[i][0] - fr[j][0] > 0.05:
+                j += 1
+            if fr[i][0] - fr[j][0] >= 0.04:
+                speed = max(speed, (fr[i][1] - fr[j][1]) / (fr[i][0] - fr[j][0]))
     return {
+        "front_speed": speed,
         "t_end": t[-1] if t else 0.0,
         "peak_force_mid": f_mid[k] if rows else 0.0,
         "t_peak": t[k] if rows else 0.0,
@@ -102,7 +114,7 @@ def main():
         r["finished"] = finished(run_dir)
         results.append(r)
     cols = ["preset", "opening_ratio", "peak_force_mid", "t_peak", "static_force_mid",
-            "max_runup", "trap_ratio", "t_end", "finished"]
+            "max_runup", "trap_ratio", "front_speed", "t_end", "finished"]
     with open(os.path.join(a.out, "summary.csv"), "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(cols)

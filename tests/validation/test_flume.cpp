@@ -207,7 +207,7 @@ TEST(Flume, ShippedSceneWritesTheBarrierOutputs) {
     for (const auto& row : f.rows) EXPECT_EQ(row[std::size_t(f.col("total_f"))], 0.0);
     for (const auto& row : u.rows) EXPECT_EQ(row[1], 0.0);
     const Csv fr = read_csv(out + "/front.csv");
-    EXPECT_EQ(fr.header, (std::vector<std::string>{"t", "x_front", "speed"}));
+    EXPECT_EQ(fr.header, (std::vector<std::string>{"t", "x_front"}));
     const Csv v = read_csv(out + "/velocity_gauges.csv");
     EXPECT_EQ(v.header, (std::vector<std::string>{"t", "g1_u", "g1_depth", "g1_froude", "g2_u",
                                                   "g2_depth", "g2_froude"}));
