@@ -15,12 +15,15 @@ namespace sphdem {
 
 template <class Space>
 struct CellList {
-  Index begin = 0, count = 0;          // the slots this list covers
-  Buffer<std::uint32_t, Space> start;  // ncell + 1 offsets: cell c is [start[c], start[c+1])
-  Buffer<std::uint64_t, Space> keys;   // sorted cell key of each slot in the range
-  Buffer<std::uint32_t, Space> order;  // source slot (relative to begin) of each sorted slot
+  Index begin = 0, count = 0;            // the slots this list covers
+  Buffer<std::uint32_t, Space> start;    // ncell + 1 offsets: cell c is [start[c], start[c+1])
+  Buffer<std::uint64_t, Space> keys;     // sorted cell key of each slot in the range
+  Buffer<std::uint32_t, Space> order;    // source slot (relative to begin) of each sorted slot
+  Buffer<std::uint8_t, Space> occupied;  // per block of cells (mark_blocks); empty: not built
 
-  CellListView view() const { return CellListView{start.data()}; }
+  CellListView view() const {
+    return CellListView{start.data(), occupied.size() ? occupied.data() : nullptr};
+  }
 };
 
 // Step 1: computes the sorted order of slots [begin, begin+count) into cl.order.
@@ -81,6 +84,30 @@ void mark_cells(Space s, const CellGrid& g, CellList<Space>& cl) {
         if (i == 0 || keys[i - 1] != k) {
           for (std::uint64_t c = prev; c <= k; ++c) st[c] = std::uint32_t(begin + i);
         }
+      });
+}
+
+// Step 4 (optional, after mark_cells): flags each block of kBlock^d cells that holds a slot of
+// the range, so that neighbour queries in empty regions return at once. Each flag is written
+// once, from its own block's rows.
+template <class Space>
+void mark_blocks(Space s, const CellGrid& g, CellList<Space>& cl) {
+  const int nbx = block_count(g, 0), nby = block_count(g, 1), nbz = block_count(g, 2);
+  const Index nb = Index(nbx) * nby * nbz;
+  cl.occupied.resize(std::size_t(nb));
+  std::uint8_t* occ = cl.occupied.data();
+  const std::uint32_t* st = cl.start.data();
+  const CellGrid grid = g;
+  for_each(
+      s, nb, SPHDEM_LAMBDA(Index b) {
+        const int bx = int(b % nbx), by = int((b / nbx) % nby), bz = int(b / (Index(nbx) * nby));
+        const int x0 = bx << kBlockShift;
+        const int x1 = x0 + kBlock - 1 < grid.n[0] ? x0 + kBlock - 1 : grid.n[0] - 1;
+        std::uint8_t any = 0;
+        for (int z = bz << kBlockShift; z < ((bz + 1) << kBlockShift) && z < grid.n[2]; ++z)
+          for (int y = by << kBlockShift; y < ((by + 1) << kBlockShift) && y < grid.n[1]; ++y)
+            if (st[grid.key(x1, y, z) + 1] > st[grid.key(x0, y, z)]) any = 1;
+        occ[b] = any;
       });
 }
 

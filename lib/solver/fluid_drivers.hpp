@@ -133,9 +133,9 @@ struct PairSums {
   Real visc_rate = 0;  // max_j |h v_ij.r_ij/(r^2+eta^2)|
 };
 
-SPHDEM_HD inline void accumulate_pair(const StepParams& p, const ParticleView& v, Index i, Index j,
-                                      const Vec3& r_ij, Real r2, bool i_fluid, bool j_fluid,
-                                      PairSums& out) {
+SPHDEM_HD SPHDEM_INLINE void accumulate_pair(const StepParams& p, const ParticleView& v, Index i,
+                                             Index j, const Vec3& r_ij, Real r2, bool i_fluid,
+                                             bool j_fluid, PairSums& out) {
   if (r2 <= Real(0)) return;  // self
   const Real r = std::sqrt(r2);
   const Real f = kernel_f(p.kernel, r);

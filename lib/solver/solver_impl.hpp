@@ -306,6 +306,7 @@ class Solver final : public SolverBase {
       permute_range(Space{}, field, cl, scratch);
     });
     mark_cells(Space{}, p_.grid, cl);
+    mark_blocks(Space{}, p_.grid, cl);
   }
 
   // Wraps periodic axes and removes fluid that left the domain (open ends). Removal compacts on

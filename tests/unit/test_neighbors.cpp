@@ -211,6 +211,66 @@ TEST(Neighbors, SumsAreBitIdenticalAcrossRuns) {
   EXPECT_EQ(a.second, b.second);  // bitwise equal doubles
 }
 
+// Block occupancy (mark_blocks): queries anywhere in the grid, most in empty blocks, against a
+// cloud clustered in one corner must find exactly the brute-force neighbours, with and without
+// periodic axes, reach 1 and 2, in 2D and 3D.
+TEST(Neighbors, EmptyBlocksSkipOnlyQueriesWithNoNeighbours) {
+  struct Case {
+    int dim, reach;
+    bool per[3];
+  };
+  const Case cases[] = {{3, 2, {false, false, false}},
+                        {3, 1, {false, false, false}},
+                        {3, 2, {true, false, true}},
+                        {2, 2, {false, false, false}},
+                        {2, 1, {true, false, false}}};
+  for (const Case& k : cases) {
+    const Real radius = 0.05;
+    const Vec3 lo(0, 0, 0), hi(1, 0.6, 0.8);
+    const CellGrid g = make_cell_grid(k.dim, lo, hi, radius / k.reach, k.per, k.reach);
+    // The cloud fills a box in the middle (queries on every side of it) and a slab at x > 0.92
+    // (touching the periodic x end, so queries near x = 0 must wrap to it).
+    Cloud c = random_cloud(k.dim, 1200, Vec3(0.4, 0.2, 0.3), Vec3(0.6, 0.4, 0.5), 11);
+    const Cloud c2 = random_cloud(k.dim, 600, Vec3(0.92, 0, 0), Vec3(1, 0.6, 0.2), 13);
+    for (std::size_t a = 0; a < c2.pos.size(); ++a) {
+      c.pos.push_back(c2.pos[a]);
+      c.id.push_back(c2.id[a] + 50000);
+    }
+    Buffer<Vec3, Host> pos;
+    pos.vec() = c.pos;
+    Buffer<GlobalId, Host> id;
+    id.vec() = c.id;
+    CellList<Host> cl;
+    const Index n = Index(c.pos.size());
+    sort_cells(Host{}, g, pos.data(), id.data(), GlobalId(100000), 0, n, cl);
+    Buffer<Vec3, Host> s1;
+    Buffer<GlobalId, Host> s2;
+    permute_range(Host{}, pos, cl, s1);
+    permute_range(Host{}, id, cl, s2);
+    mark_cells(Host{}, g, cl);
+    mark_blocks(Host{}, g, cl);
+    const auto empty = std::count(cl.occupied.vec().begin(), cl.occupied.vec().end(), 0);
+    ASSERT_GT(empty, 0) << "dim " << k.dim << " reach " << k.reach;
+    ASSERT_GT(std::count(cl.occupied.vec().begin(), cl.occupied.vec().end(), 1), 0);
+    const Cloud q = random_cloud(k.dim, 4000, lo, hi, 12);
+    Index skipped = 0, found = 0;
+    for (std::size_t a = 0; a < q.pos.size(); ++a) {
+      std::set<GlobalId> ref, got;
+      for (std::size_t j = 0; j < c.pos.size(); ++j)
+        if (norm2(g.separation(q.pos[a], c.pos[j])) < radius * radius) ref.insert(c.id[j]);
+      for_each_neighbor(g, cl.view(), pos.data(), q.pos[a], radius * radius,
+                        [&](Index j, const Vec3&, Real) { got.insert(id[std::size_t(j)]); });
+      ASSERT_EQ(got, ref) << "dim " << k.dim << " reach " << k.reach << " query " << a;
+      const int cx = g.coord(q.pos[a].x, 0), cy = k.dim == 2 ? 0 : g.coord(q.pos[a].y, 1);
+      if (!window_occupied(g, cl.occupied.data(), cx, cy, g.coord(q.pos[a].z, 2))) ++skipped;
+      if (!ref.empty()) ++found;
+    }
+    // Both branches are exercised: many queries return early, some find neighbours.
+    EXPECT_GT(skipped, 1000) << "dim " << k.dim << " reach " << k.reach;
+    EXPECT_GT(found, 100) << "dim " << k.dim << " reach " << k.reach;
+  }
+}
+
 TEST(Neighbors, HostRadixSortIsStable) {
   std::vector<std::uint64_t> keys = {5, 3, 5, 1, 3, 5, 0, 1};
   std::vector<std::uint32_t> vals = {0, 1, 2, 3, 4, 5, 6, 7};
