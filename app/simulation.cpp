@@ -194,7 +194,7 @@ class DiagnosticWriter {
   // append: a restart continues the series already in `dir`.
   // enabled = false (ranks other than 0): no files; write() must not be called.
   DiagnosticWriter(const Scene& s, const std::string& dir, bool append, bool enabled = true)
-      : scene_(s) {
+      : scene_(s), dir_(dir) {
     const Diagnostics& d = s.diagnostics;
     for (std::size_t i = 0; i < d.profiles.size(); ++i) profile_next_.push_back(0);
     if (!enabled) return;
@@ -270,11 +270,19 @@ class DiagnosticWriter {
       const ProfileSpec& pr = d.profiles[i];
       while (profile_next_[i] < pr.times.size() && t >= pr.times[profile_next_[i]]) {
         const int n = std::max(2, pr.samples);
+        // One file per requested time as well (<name>_<time>.csv, the time as in the scene),
+        // which is what a plot of the profile at 0.7 s wants to open.
+        char tag[32];
+        std::snprintf(tag, sizeof tag, "%g", double(pr.times[profile_next_[i]]));
+        CsvSeries at(dir_ + "/" + pr.name + "_" + tag + ".csv", {"t", "s", "x", "y", "z_surface"});
         for (int k = 0; k < n; ++k) {
           const Real s = Real(k) / Real(n - 1);
           const Vec3 x = pr.from + (pr.to - pr.from) * s;
           const Real z = probe_surface_height(ps, p, x.x, x.y);
-          profile_[i].row({t, s * norm(pr.to - pr.from), x.x, x.y, std::isfinite(z) ? z : 0.0});
+          const std::vector<double> row{t, s * norm(pr.to - pr.from), x.x, x.y,
+                                        std::isfinite(z) ? z : 0.0};
+          profile_[i].row(row);
+          at.row(row);
         }
         ++profile_next_[i];
       }
@@ -313,6 +321,7 @@ class DiagnosticWriter {
 
  private:
   const Scene& scene_;
+  std::string dir_;
   std::vector<CsvSeries> pressure_, height_, front_, force_, profile_;
   std::vector<std::size_t> profile_next_;
   CsvSeries energy_, impact_, runup_, trap_, velocity_;

@@ -192,8 +192,9 @@ TEST(Flume, ImpactForceCsvSumsTheWalls) {
 TEST(Flume, ShippedSceneWritesTheBarrierOutputs) {
   const std::string path = std::string(SPHDEM_SOURCE_DIR) + "/inputs/flume/flume.yaml";
   for (const char* preset : {"P00", "V45"}) {
-    const Scene scene = load_scene(path, {"sph.dp=0.01", std::string("barrier.preset=") + preset,
-                                          "diagnostics.every=0.0001", "frames.every=0"});
+    const Scene scene = load_scene(
+        path, {"sph.dp=0.01", std::string("barrier.preset=") + preset, "diagnostics.every=0.0001",
+               "frames.every=0", "diagnostics.profiles[0].times=[0, 0.0002]"});
     const std::string out = std::string("flume_") + preset;
     const RunResult r = run(scene, out, 5);
     ASSERT_FALSE(r.unstable) << r.failure;
@@ -212,6 +213,25 @@ TEST(Flume, ShippedSceneWritesTheBarrierOutputs) {
     EXPECT_EQ(v.header, (std::vector<std::string>{"t", "g1_u", "g1_depth", "g1_froude", "g2_u",
                                                   "g2_depth", "g2_froude"}));
     for (const auto& row : v.rows) EXPECT_EQ(row[2], 0.0);  // the debris has not got there
+    // The run-up profile: one file per requested time, and all of them in runup_profile.csv.
+    // Along the centreline the surface is the block's top (0.04327 m, to the lattice: the top
+    // layer's centres at 0.035 m) over x < 0, and the bed (0) downstream.
+    const Csv all = read_csv(out + "/runup_profile.csv");
+    EXPECT_EQ(all.rows.size(), 2u * 321u);
+    for (const char* tag : {"0", "0.0002"}) {
+      const Csv pr = read_csv(out + "/runup_profile_" + tag + ".csv");
+      ASSERT_EQ(pr.rows.size(), 321u) << tag;
+      EXPECT_EQ(pr.header, (std::vector<std::string>{"t", "s", "x", "y", "z_surface"}));
+      for (const auto& row : pr.rows) {
+        const double x = row[2], z = row[4];
+        if (x > -0.19 && x < -0.01) {
+          EXPECT_NEAR(z, 0.04, 0.01) << tag << " x " << x;
+        }
+        if (x > 0.05) {
+          EXPECT_EQ(z, 0.0) << tag << " x " << x;
+        }
+      }
+    }
     // All 4.5 kg of debris is upstream of the barrier (to the lattice's rounding: 3200 particles
     // of 1300 dp^3 = 4.16 kg at dp = 0.01, the block being 4.3 layers deep).
     const Csv tr = read_csv(out + "/trap.csv");
