@@ -254,6 +254,7 @@ const EnumTable<std::string> kBarrierPresets = {
     {"P00", "P00"}, {"P30", "P30"}, {"P45", "P45"}, {"V30", "V30"}, {"V45", "V45"}};
 const EnumTable<char> kBarrierLayouts = {{"P", 'P'}, {"V", 'V'}};
 const EnumTable<bool> kBarrierApex = {{"upstream", true}, {"downstream", false}};
+const EnumTable<std::string> kPackPlacements = {{"shelf", "shelf"}, {"random", "random"}};
 
 enum class ShapeType {
   kBox,
@@ -1000,14 +1001,22 @@ void Parser::parse_dem(const Field& f) {
   std::vector<Field> pack_items;
   if (auto pl = m.find("packs")) pack_items = list(*pl);
   for (const Field& item : pack_items) {
-    MapReader pm = map(
-        item, {"shape", "count", "density", "lo", "hi", "velocity", "random_orientation", "seed"});
+    MapReader pm = map(item, {"shape", "count", "fraction", "placement", "density", "lo", "hi",
+                              "velocity", "random_orientation", "seed"});
     GrainPack p;
     Field f_shape = pm.require("shape");
     p.shape = string(f_shape);
     check_shape(f_shape, p.shape);
-    p.count = pm.integer("count", 1, 100000000, 0);
-    if (!pm.find("count")) pm.require("count");
+    if (auto fc = pm.find("count")) {
+      if (auto ff = pm.find("fraction"))
+        fail(*ff, "give either count or fraction (solid volume fraction of the box), not both");
+      p.count = integer(*fc, 1, 100000000);
+    } else if (pm.find("fraction")) {
+      p.fraction = pm.number("fraction", left_open(0, 0.3));
+    } else {
+      pm.require("count");
+    }
+    p.placement = pm.enumeration("placement", kPackPlacements, p.placement);
     p.density = pm.number("density", left_open(0, 1e5), p.density);
     p.lo = pm.vec3("lo", kCoord);
     Field f_hi = pm.require("hi");

@@ -125,13 +125,61 @@ DemBuild build_dem(const Scene& scene, std::ostream& log) {
       out.min_diameter = std::min(out.min_diameter, sys.shape(t).equivalent_diameter());
     }
     out.max_radius = std::max(out.max_radius, rb);
+    const std::string where = scene.source + ": dem.packs[" + std::to_string(k) + "]";
+    const Vec3 box = p.hi - p.lo;
+    const Real v_box = box.x * box.y * box.z;
+    int count = p.count;
+    if (p.fraction > 0) {
+      Real v_grain = 0;
+      for (int t : ts) v_grain += sys.shape(t).volume() / Real(ts.size());
+      count = int(std::lround(p.fraction * v_box / v_grain));
+      log << where << ": solid fraction " << p.fraction << " of the box (" << v_box << " m^3) -> "
+          << count << " grains of " << v_grain << " m^3 (fraction " << Real(count) * v_grain / v_box
+          << ")\n";
+      if (count == 0) continue;
+    }
+    std::mt19937 rng(p.seed);
+    if (p.placement == "random") {
+      // Uniform centres in the box shrunk by the bounding radius; a candidate closer than
+      // 2 rb (plus a 1 % gap) to a placed grain is drawn again.
+      const Vec3 lo = p.lo + Vec3(rb, rb, rb), hi = p.hi - Vec3(rb, rb, rb);
+      for (int a = 0; a < 3; ++a)
+        if (!(hi[a] >= lo[a]))
+          throw InputError(where + ": the box is narrower than one grain (bounding diameter " +
+                           std::to_string(2 * rb) + " m)");
+      std::uniform_real_distribution<Real> u(0, 1);
+      std::vector<Vec3> placed;
+      const Real d2 = Real(2.02) * rb * Real(2.02) * rb;
+      for (int g = 0; g < count; ++g) {
+        bool ok = false;
+        for (int attempt = 0; attempt < 100000 && !ok; ++attempt) {
+          const Vec3 c(lo.x + (hi.x - lo.x) * u(rng), lo.y + (hi.y - lo.y) * u(rng),
+                       lo.z + (hi.z - lo.z) * u(rng));
+          ok = true;
+          for (const Vec3& o : placed)
+            if (norm2(c - o) < d2) {
+              ok = false;
+              break;
+            }
+          if (ok) placed.push_back(c);
+        }
+        if (!ok)
+          throw InputError(
+              where + ": placed " + std::to_string(g) + " of " + std::to_string(count) +
+              " grains at random; no room for more (bounding diameter " + std::to_string(2 * rb) +
+              " m): lower the count or fraction, or use placement: shelf");
+        const int t = ts[std::size_t(g) % ts.size()];
+        const Quat q = p.random_orientation ? random_rotation(rng) : Quat{};
+        sys.add_body(t, p.density, placed.back(), q, p.velocity);
+      }
+      continue;
+    }
     // Shelf packing of the grains' world bounding boxes (each grain in its own random
     // orientation): rows along x, rows stacked along y, layers along z, each layer as tall as its
     // tallest grain. Boxes do not overlap, so neither do grains; a gap of 1 % of rb separates them.
-    std::mt19937 rng(p.seed);
     const Real gap = Real(0.01) * rb;
     Real x = p.lo.x, y = p.lo.y, z = p.lo.z, row_depth = 0, layer_height = 0;
-    for (int g = 0; g < p.count; ++g) {
+    for (int g = 0; g < count; ++g) {
       const int t = ts[std::size_t(g) % ts.size()];
       const Quat q = p.random_orientation ? random_rotation(rng) : Quat{};
       Vec3 blo(1e30, 1e30, 1e30), bhi(-1e30, -1e30, -1e30);
@@ -155,8 +203,7 @@ DemBuild build_dem(const Scene& scene, std::ostream& log) {
         row_depth = layer_height = 0;
       }
       if (x + ext.x > p.hi.x || y + ext.y > p.hi.y || z + ext.z > p.hi.z) {
-        throw InputError(scene.source + ": dem.packs[" + std::to_string(k) +
-                         "]: " + std::to_string(p.count) + " grains do not fit in the box; " +
+        throw InputError(where + ": " + std::to_string(count) + " grains do not fit in the box; " +
                          std::to_string(g) + " were placed up to z = " + std::to_string(z) +
                          " m (grain bounding diameter " + std::to_string(2 * rb) +
                          " m; raise hi.z or widen the box)");

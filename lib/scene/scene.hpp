@@ -225,9 +225,17 @@ struct GrainShape {
 // A block of grains: `count` grains, each in a seeded random orientation, placed without overlap
 // by shelf-packing their world bounding boxes into [lo, hi] from the bottom up (rows along x,
 // then y, then layers along z). Packs are usually rained into place under gravity (dem.settle).
+//
+// Instead of `count`, `fraction` gives the grains' solid volume fraction of the box [lo, hi]:
+// count = round(fraction V_box / V_grain), V_grain the mean volume of the shape's variants (the
+// flume's boulders: the fraction of the debris block). placement: random scatters the grains
+// uniformly through the box instead (bounding spheres kept apart; seeded), for a few boulders
+// spread through a fluid block rather than stacked in one corner.
 struct GrainPack {
   std::string shape;
   int count = 0;
+  Real fraction = 0;                // > 0: the count follows from it at build
+  std::string placement = "shelf";  // shelf | random
   Real density = 2500;
   Vec3 lo, hi;
   Vec3 velocity;
