@@ -704,9 +704,12 @@ void check_scene(const Scene& scene, std::ostream& os) {
   std::size_t bytes_per = 0;
   ps.for_each_field([&](const char*, auto& b) { bytes_per += sizeof(*b.data()); });
   const double mem = double(bytes_per) * double(ps.size()) + 8.0 * double(p.grid.cell_count()) * 2;
-  // Rough cost from the CPU figure in docs/BENCHMARKS.md: about 4e4 fluid particle-steps/s per
-  // thread for the 3D dam break in double precision (3D neighbour counts; 2D runs go faster).
-  const double per_thread = scene.dim == 3 ? 4e4 : 2.5e5;
+  // Rough cost from the CPU figures in docs/BENCHMARKS.md: in 3D, double precision, a thread
+  // does about 1.3e7 (fluid particle x neighbour)-steps/s for the whole step (the dam break at
+  // 291 neighbours: 5.5e4 particle-steps/s; the flume at 173: 7e4), the neighbours being the
+  // lattice sites within 2h; 2D runs go faster.
+  const double kh = double(2 * p.h / p.dp);
+  const double per_thread = scene.dim == 3 ? 1.3e7 / (4.18879 * kh * kh * kh) : 2.5e5;
   const double cost = double(rep.fluid) * steps / (per_thread * host_thread_count());
   os << "scene '" << scene.name << "' (" << scene.source << "), " << scene.dim << "D\n"
      << grains.str() << "particles: fluid " << rep.fluid << ", wall boundary " << rep.wall
