@@ -99,10 +99,6 @@ std::unique_ptr<SolverBase> make_solver(
                      " ranks, but this run has 1 (start it with mpirun -n " +
                      std::to_string(asked) + ")");
   if (nranks > 1) {
-    if (scene.dem.enabled)
-      throw InputError(scene.source +
-                       ": dem: grains in a fluid run on one rank only for now (this run has " +
-                       std::to_string(nranks) + " ranks)");
     const StepParams p = make_step_params(scene, c0);
     for (int k = 0; k < 3; ++k)
       if (p.grid.periodic[k])
@@ -426,14 +422,14 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
   DiagnosticWriter diag(scene, opt.out_dir, restarting, root);
   diag.set_profile_state(profile_state);
   std::unique_ptr<std::ofstream> bodies_csv;
-  if (coupling) {
+  if (coupling && root) {  // the DEM is replicated on every rank: rank 0 writes it
     bodies_csv = std::make_unique<std::ofstream>(opt.out_dir + "/bodies.csv",
                                                  restarting ? std::ios::app : std::ios::trunc);
     *bodies_csv << std::setprecision(10);
     if (!restarting) *bodies_csv << "t,id,x,y,z,vx,vy,vz,wx,wy,wz,fx,fy,fz,tx,ty,tz\n";
   }
   auto write_diagnostics = [&]() {
-    if (coupling) {  // each grain's state and the fluid's force and torque on it
+    if (bodies_csv) {  // each grain's state and the fluid's force and torque on it
       const auto& bodies = dem.system->bodies();
       for (std::size_t i = 0; i < bodies.size(); ++i) {
         const dem::RigidBody& b = bodies[i];

@@ -188,6 +188,7 @@ ParticleSet<Host> gather_on_root(MPI_Comm comm, const ParticleSet<Host>& ps,
   });
   fl.n_fluid = nf;
   fl.n_wall = nw;
+  grains_last(fl);  // grain particles after the walls, counted apart
   return fl;
 }
 
@@ -240,6 +241,7 @@ void distribute_after_read(const MpiExchange& ex, ParticleSet<Host>& ps) {
   });
   ps.n_wall = Index(nw_all);
   ps.n_grain = 0;
+  grains_last(ps);  // every rank now holds every grain particle: after the walls
   // Fluid: to its owner, however far.
   redistribute(ex.decomposition(), ps);
 }

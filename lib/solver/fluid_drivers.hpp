@@ -16,13 +16,24 @@
 namespace sphdem {
 
 // The cell lists a driver needs: owned fluid, halo fluid (copies of other ranks' particles; empty
-// on one rank) and boundary (walls + grains).
+// on one rank), fixed walls, and grain boundary particles (sorted on their own each step, so the
+// walls keep their slots while grains move).
 struct NeighborLists {
   CellListView fluid;
   CellListView boundary;
   CellListView halo;
   bool has_halo = false;
+  CellListView grain;
+  bool has_grain = false;
 };
+
+// Calls f(j, r_ij, r2) for every boundary neighbour of x, walls then grains.
+template <class F>
+SPHDEM_HD inline void for_each_boundary_neighbor(const StepParams& p, const NeighborLists& nl,
+                                                 const Vec3* pos, const Vec3& x, F&& f) {
+  for_each_neighbor(p.grid, nl.boundary, pos, x, p.radius2, f);
+  if (nl.has_grain) for_each_neighbor(p.grid, nl.grain, pos, x, p.radius2, f);
+}
 
 // Calls f(j, r_ij, r2) for every fluid neighbour of x, owned then halo.
 template <class F>
@@ -109,8 +120,8 @@ void compute_viscous_state(Space s, ParticleView v, NeighborLists nl, StepParams
         };
         for_each_fluid_neighbor(
             p, nl, v.pos, ri, [&](Index j, const Vec3& r_ij, Real r2) { add(j, r_ij, r2, true); });
-        for_each_neighbor(p.grid, nl.boundary, v.pos, ri, p.radius2,
-                          [&](Index j, const Vec3& r_ij, Real r2) { add(j, r_ij, r2, false); });
+        for_each_boundary_neighbor(
+            p, nl, v.pos, ri, [&](Index j, const Vec3& r_ij, Real r2) { add(j, r_ij, r2, false); });
         const SymTensor eps = strain_rate(G);
         if (p.hbp) {
           const Real tau_y = yield_stress(p.hbp_params, v.press[i]);
@@ -202,10 +213,9 @@ void compute_rates(Space s, ParticleView v, NeighborLists nl, StepParams p, Inde
                               [&](Index j, const Vec3& r_ij, Real r2) {
                                 accumulate_pair(p, v, i, j, r_ij, r2, true, true, sums);
                               });
-          for_each_neighbor(p.grid, nl.boundary, v.pos, ri, p.radius2,
-                            [&](Index j, const Vec3& r_ij, Real r2) {
-                              accumulate_pair(p, v, i, j, r_ij, r2, true, false, sums);
-                            });
+          for_each_boundary_neighbor(p, nl, v.pos, ri, [&](Index j, const Vec3& r_ij, Real r2) {
+            accumulate_pair(p, v, i, j, r_ij, r2, true, false, sums);
+          });
           v.acc[i] = sums.acc + p.gravity;
         } else {
           v.acc[i] = sums.acc;

@@ -9,6 +9,10 @@
 // Every particle carries a 64-bit global id; compare, sort and restart by id, never by slot.
 #pragma once
 
+#include <algorithm>
+#include <type_traits>
+#include <vector>
+
 #include <cstdint>
 #include <string>
 
@@ -43,8 +47,9 @@ struct ParticleView {
   Vec3* sps_o = nullptr;  // fluid: SPS tau/rho, off-diagonal (xy, xz, yz)
 };
 
-// The body field of grain g's boundary particles is kGrainBodyBase - g. The solver sorts walls
-// and grain particles together by cell, so this field (not the slot) tells them apart.
+// The body field of grain g's boundary particles is kGrainBodyBase - g. The solver keeps grain
+// slots after the walls (grains_last), but sets read from files or gathered from ranks may mix
+// them: this field, not the slot, tells them apart.
 constexpr std::int32_t kGrainBodyBase = -2;
 SPHDEM_HD inline bool is_grain_body(std::int32_t body) {
   return body <= kGrainBodyBase;
@@ -108,5 +113,29 @@ struct ParticleSet {
     return v;
   }
 };
+
+// Moves the grain slots of a host set's boundary range (told apart by their body field,
+// wherever they lie in it) to its end in global-id order, the walls keeping their order, and sets
+// n_wall and n_grain.
+template <class Set>
+void grains_last(Set& ps) {
+  const Index wb = ps.wall_begin(), n = ps.size();
+  std::vector<Index> walls, grains;
+  for (Index i = wb; i < n; ++i)
+    (is_grain_body(ps.body[std::size_t(i)]) ? grains : walls).push_back(i);
+  if (grains.empty() && ps.n_grain == 0) return;
+  std::sort(grains.begin(), grains.end(),
+            [&](Index a, Index b) { return ps.id[std::size_t(a)] < ps.id[std::size_t(b)]; });
+  std::vector<Index> perm = walls;
+  perm.insert(perm.end(), grains.begin(), grains.end());
+  ps.for_each_field([&](const char*, auto& b) {
+    auto& v = b.vec();
+    std::vector<std::decay_t<decltype(v[0])>> t(perm.size());
+    for (std::size_t j = 0; j < perm.size(); ++j) t[j] = v[std::size_t(perm[j])];
+    std::copy(t.begin(), t.end(), v.begin() + wb);
+  });
+  ps.n_wall = Index(walls.size());
+  ps.n_grain = Index(grains.size());
+}
 
 }  // namespace sphdem

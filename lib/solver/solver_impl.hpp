@@ -169,9 +169,12 @@ class Solver final : public SolverBase {
     if (ex_) ex_->max(&m, 1);
     max_id_ = GlobalId(m);
     global_fluid_ = ex_ ? Index(ex_->sum(std::int64_t(particles.n_fluid))) : particles.n_fluid;
+    grains_last(particles);
     if (ex_) {  // every wall particle into the store; this rank keeps those it can use
+      ParticleSet<Host> grains = take_grains(particles);
       wall_store_ = take_walls(particles);
       append_walls(particles, select_walls());
+      append_grains(particles, std::move(grains));
     }
     to_space(Space{}, std::move(particles), ps_);
     built_ = false;  // the next step rebuilds the halo
@@ -182,9 +185,13 @@ class Solver final : public SolverBase {
 
   std::vector<std::uint8_t> wall_mine() const override { return mine_host_; }
 
+  // Grains on many ranks: every rank holds every grain particle (the DEM state is replicated) and
+  // places them from the same poses; the rank whose box holds a particle's ghost node computes its
+  // mDBC state, the others zero it, and a sum over ranks gives every rank the owner's values.
   void move_grains(const std::function<void(ParticleSet<Host>&)>& f) override {
     on_host([&](ParticleSet<Host>& h) { f(h); });
-    sort_boundary();
+    sort_grains();
+    if (ex_) mark_grain_owners();
   }
   std::int64_t halo_rebuilds() const override { return rebuilds_; }
 
@@ -197,7 +204,7 @@ class Solver final : public SolverBase {
           double c = 0;
           auto count = [&](Index, const Vec3&, Real r2) { c += r2 > 0 ? 1 : 0; };
           for_each_fluid_neighbor(p, nl, v.pos, v.pos[i], count);
-          for_each_neighbor(p.grid, nl.boundary, v.pos, v.pos[i], p.radius2, count);
+          for_each_boundary_neighbor(p, nl, v.pos, v.pos[i], count);
           return c;
         });
   }
@@ -217,6 +224,9 @@ class Solver final : public SolverBase {
         wall_sync(ps_.rho, false);
         wall_sync(ps_.press, false);
         wall_sync(ps_.vel_bc, false);
+        grain_sum(ps_.rho);
+        grain_sum(ps_.press);
+        grain_sum(ps_.vel_bc);
       }
     }
     if (p_.hbp || p_.sps) {
@@ -232,9 +242,11 @@ class Solver final : public SolverBase {
     compute_rates(Space{}, v, nl, p_, ps_.wall_begin(), ps_.size(), false, rate_.data());
     if (ex_) {
       wall_sync(ps_.acc, true);  // the owner holds the whole fluid force on its wall particles
+      grain_sum(ps_.acc);        // every rank holds the whole fluid force on every grain slot
       if (!p_.mdbc) {            // DBC: the density rate is a sum over all ranks' fluid
         wall_sync(ps_.drho, true);
         wall_sync(ps_.drho, false);
+        grain_sum(ps_.drho);
       }
     }
     auto t2 = clock::now();
@@ -295,7 +307,13 @@ class Solver final : public SolverBase {
   }
 
   // Sorts the boundary range once (fixed walls do not move).
-  void sort_boundary() { sort_range(ps_.wall_begin(), ps_.n_wall + ps_.n_grain, boundary_cells_); }
+  // Walls and grains are sorted as separate ranges: walls keep their slots (the wall plan on many
+  // ranks refers to them) while grains move every step.
+  void sort_boundary() {
+    sort_range(ps_.wall_begin(), ps_.n_wall, boundary_cells_);
+    sort_grains();
+  }
+  void sort_grains() { sort_range(ps_.wall_begin() + ps_.n_wall, ps_.n_grain, grain_cells_); }
   void sort_fluid() { sort_range(0, ps_.n_fluid, fluid_cells_); }
 
   void sort_range(Index begin, Index count, CellList<Space>& cl) {
@@ -386,7 +404,7 @@ class Solver final : public SolverBase {
   // The cell lists of the current layout.
   NeighborLists lists() const {
     return NeighborLists{fluid_cells_.view(), boundary_cells_.view(), halo_cells_.view(),
-                         ps_.n_halo > 0};
+                         ps_.n_halo > 0,      grain_cells_.view(),    ps_.n_grain > 0};
   }
 
   // Removes the halo slots (their owners hold the particles); walls move down.
@@ -423,6 +441,11 @@ class Solver final : public SolverBase {
     for_each(
         Space{}, nc, SPHDEM_LAMBDA(Index c) { st[c] = std::uint32_t(Index(st[c]) + delta); });
     boundary_cells_.begin += delta;
+    std::uint32_t* gs = grain_cells_.start.data();
+    const Index ng = Index(grain_cells_.start.size());
+    for_each(
+        Space{}, ng, SPHDEM_LAMBDA(Index c) { gs[c] = std::uint32_t(Index(gs[c]) + delta); });
+    grain_cells_.begin += delta;
   }
 
   // Builds the halo (every field), sorts its range by (cell, id), and resizes the scratch.
@@ -627,29 +650,88 @@ class Solver final : public SolverBase {
         wall_store_.press[i] = tait_pressure(p_.eos, rho[i]);
     }
     on_host([&](ParticleSet<Host>& h) {
+      ParticleSet<Host> grains = take_grains(h);
       take_walls(h);
       append_walls(h, select_walls());
+      append_grains(h, std::move(grains));
     });
     rate_.resize(std::size_t(ps_.size()));
     sort_boundary();
     mark_wall_owners();
   }
 
-  // Which wall slots this rank computes: those whose mDBC ghost node (or, with DBC, whose
-  // position) lies in its box. Walls are fixed, so this holds for the whole run.
+  // Which wall and grain slots this rank computes: those whose mDBC ghost node (or, with DBC,
+  // whose position) lies in its box. Walls are fixed, so their plan holds for the whole run;
+  // grains are re-marked after every move (mark_grain_owners) and summed over all ranks instead.
   void mark_wall_owners() {
     const Index b = ps_.wall_begin(), n = ps_.n_wall + ps_.n_grain;
     const ParticleSet<Host>& h = host_particles();
     std::vector<std::uint8_t> mine(static_cast<std::size_t>(n));
     for (Index k = 0; k < n; ++k)
       mine[std::size_t(k)] = ex_->owns(p_.mdbc ? h.ghost[b + k] : h.pos[b + k]) ? 1 : 0;
+    set_mine(std::move(mine));
+    ex_->build_wall_plan(h.id.data() + b, mine_host_.data(), ps_.n_wall);
+  }
+
+  void mark_grain_owners() {
+    if (ps_.n_grain == 0) return;
+    const Index b = ps_.wall_begin(), nw = ps_.n_wall, n = nw + ps_.n_grain;
+    const ParticleSet<Host>& h = host_particles();
+    std::vector<std::uint8_t> mine = mine_host_;
+    mine.resize(std::size_t(n));
+    for (Index k = nw; k < n; ++k)
+      mine[std::size_t(k)] = ex_->owns(p_.mdbc ? h.ghost[b + k] : h.pos[b + k]) ? 1 : 0;
+    set_mine(std::move(mine));
+  }
+
+  void set_mine(std::vector<std::uint8_t> mine) {
     if constexpr (std::is_same_v<Space, Host>) {
       wall_mine_.vec() = mine;
     } else {
       wall_mine_.upload(mine);
     }
-    mine_host_ = mine;
-    ex_->build_wall_plan(h.id.data() + b, mine.data(), n);
+    mine_host_ = std::move(mine);
+  }
+
+  // Grain slots: every rank holds all of them in the same order (same poses, same sort), so a sum
+  // over ranks slot by slot adds the partial values (or the owner's value to zeros).
+  template <class T>
+  void grain_sum(Buffer<T, Space>& field) {
+    if (ps_.n_grain == 0) return;
+    static_assert(sizeof(T) % sizeof(Real) == 0, "grain_sum: a field of Reals");
+    host_valid_ = false;
+    std::vector<T> tmp;
+    T* f = get_host<T>(field, tmp) + ps_.wall_begin() + ps_.n_wall;
+    ex_->sum(reinterpret_cast<Real*>(f), ps_.n_grain * Index(sizeof(T) / sizeof(Real)));
+    put_host<T>(field, tmp);
+  }
+
+  // Splits the grain slots (the set's tail, after grains_last) off into a set of their own.
+  static ParticleSet<Host> take_grains(ParticleSet<Host>& ps) {
+    const Index gb = ps.wall_begin() + ps.n_wall, n = ps.size();
+    ParticleSet<Host> g;
+    std::vector<void*> out;
+    g.for_each_field([&](const char*, auto& b) { out.push_back(&b); });
+    std::size_t k = 0;
+    ps.for_each_field([&](const char*, auto& b) {
+      auto* o = static_cast<std::decay_t<decltype(b)>*>(out[k++]);
+      o->vec().assign(b.vec().begin() + gb, b.vec().begin() + n);
+      b.vec().resize(std::size_t(gb));
+    });
+    g.n_grain = n - gb;
+    ps.n_grain = 0;
+    return g;
+  }
+
+  static void append_grains(ParticleSet<Host>& ps, ParticleSet<Host>&& g) {
+    std::vector<void*> src;
+    g.for_each_field([&](const char*, auto& b) { src.push_back(&b); });
+    std::size_t k = 0;
+    ps.for_each_field([&](const char*, auto& b) {
+      auto* s = static_cast<std::decay_t<decltype(b)>*>(src[k++]);
+      b.vec().insert(b.vec().end(), s->vec().begin(), s->vec().end());
+    });
+    ps.n_grain = g.n_grain;
   }
 
  private:
@@ -659,7 +741,7 @@ class Solver final : public SolverBase {
   ParticleSet<Host> host_;
   bool host_valid_ = false;
   std::shared_ptr<Exchange> ex_;
-  CellList<Space> fluid_cells_, boundary_cells_, halo_cells_;
+  CellList<Space> fluid_cells_, boundary_cells_, halo_cells_, grain_cells_;
   Buffer<std::uint8_t, Space> wall_mine_;
   std::vector<std::uint32_t> root_at_, leaf_at_;  // current owned/halo slot -> plan root/leaf
   std::vector<Vec3> pos_at_build_;                // owned positions at the last rebuild, by root
