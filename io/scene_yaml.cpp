@@ -690,11 +690,16 @@ void Parser::parse_fluid(const Field& f) {
 
 void Parser::parse_sph(const Field& f) {
   SphParams& p = scene_->sph;
-  MapReader m = map(f, {"dp", "h_factor", "boundary", "slip", "boundary_layers"});
+  MapReader m = map(f, {"dp", "h_factor", "boundary", "slip", "boundary_layers", "no_penetration"});
   p.dp = m.number("dp", left_open(0, 1));
   p.h_factor = m.number("h_factor", closed(0.5, 3), p.h_factor);
   p.boundary = m.enumeration("boundary", kBoundaryMethods, p.boundary);
   p.slip = m.enumeration("slip", kSlipConditions, p.slip);
+  p.no_penetration = m.boolean("no_penetration", p.no_penetration);
+  if (p.no_penetration && p.boundary != BoundaryMethod::kMdbc)
+    fail(*m.find("no_penetration"),
+         "the penetration control is part of mDBC (boundary: mdbc); DBC walls resist approach "
+         "through their own density");
   p.boundary_layers = m.integer("boundary_layers", 0, 20, p.boundary_layers);
 }
 

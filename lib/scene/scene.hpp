@@ -62,6 +62,9 @@ struct SphParams {
   BoundaryMethod boundary = BoundaryMethod::kMdbc;
   SlipCondition slip = SlipCondition::kNoSlip;
   int boundary_layers = 0;  // 0 = enough layers to fill the kernel support (2h)
+  // mDBC penetration control (sph/mdbc.hpp, wall_pair_*): walls never pull fluid, and fluid
+  // moving toward a wall sees the wall approach at the mirrored speed in the continuity equation.
+  bool no_penetration = false;
 };
 
 struct TimeParams {

@@ -153,7 +153,16 @@ SPHDEM_HD SPHDEM_INLINE void accumulate_pair(const StepParams& p, const Particle
   const Real rho_i = v.rho[i], rho_j = v.rho[j];
   const Real m_j = v.mass[j];
   // Continuity uses the solid's own velocity for boundary particles.
-  const Vec3 v_ij = v.vel[i] - v.vel[j];
+  Vec3 v_ij = v.vel[i] - v.vel[j];
+  Real p_i = v.press[i], p_j = v.press[j];
+  if (p.no_penetration && i_fluid != j_fluid) {  // a fluid-wall pair (sph/mdbc.hpp)
+    if (i_fluid) {
+      v_ij = wall_continuity_velocity(v_ij, r_ij, v.normal[j]);
+      p_i = wall_pair_pressure(p_i);
+    } else {  // the same pair seen from the wall: its force
+      p_j = wall_pair_pressure(p_j);
+    }
+  }
   out.drho += continuity_ij(m_j, v_ij, r_ij, f);
   if (p.diffusion && i_fluid && j_fluid) {
     const Real height_ij = -dot(r_ij, p.g_hat);
@@ -161,7 +170,7 @@ SPHDEM_HD SPHDEM_INLINE void accumulate_pair(const StepParams& p, const Particle
         diffusion_drho_ij(p.eos, rho_i, rho_j, p.diffusion_hydrostatic, p.g_mag, height_ij);
     out.drho += diffusion_ij(p.delta_h_c0, d, f, m_j, rho_j);
   }
-  out.acc += pressure_acc_ij(m_j, v.press[i], rho_i, v.press[j], rho_j, r_ij, f);
+  out.acc += pressure_acc_ij(m_j, p_i, rho_i, p_j, rho_j, r_ij, f);
   // Viscous term: a boundary neighbour contributes through its mDBC velocity.
   const Vec3 vi = i_fluid || !p.mdbc ? v.vel[i] : v.vel_bc[i];
   const Vec3 vj = j_fluid || !p.mdbc ? v.vel[j] : v.vel_bc[j];
@@ -247,12 +256,14 @@ SPHDEM_HD inline void verlet_update(Vec3& pos, Vec3& vel, Vec3& vel_prev, Real& 
 }
 
 template <class Space>
-void integrate_verlet(Space s, ParticleView v, Index begin, Index end, Real dt, bool euler) {
+void integrate_verlet(Space s, ParticleView v, Index begin, Index end, Real dt, bool euler,
+                      EosParams eos) {
   for_each(
       s, end - begin, SPHDEM_LAMBDA(Index k) {
         const Index i = begin + k;
         verlet_update(v.pos[i], v.vel[i], v.vel_prev[i], v.rho[i], v.rho_prev[i], v.acc[i],
                       v.drho[i], dt, euler);
+        v.rho[i] = floor_density(eos, v.rho[i]);
       });
 }
 
@@ -277,7 +288,7 @@ void integrate_dbc_density(Space s, ParticleView v, Index begin, Index end, Real
 // The predictor keeps r^n in the fluid slot's `ghost` field (unused for fluid) and v^n, rho^n in
 // vel_prev/rho_prev.
 template <class Space>
-void symplectic_predict(Space s, ParticleView v, Index begin, Index end, Real dt) {
+void symplectic_predict(Space s, ParticleView v, Index begin, Index end, Real dt, EosParams eos) {
   for_each(
       s, end - begin, SPHDEM_LAMBDA(Index k) {
         const Index i = begin + k;
@@ -286,12 +297,12 @@ void symplectic_predict(Space s, ParticleView v, Index begin, Index end, Real dt
         v.rho_prev[i] = v.rho[i];
         v.pos[i] += v.vel[i] * (Real(0.5) * dt);
         v.vel[i] += v.acc[i] * (Real(0.5) * dt);
-        v.rho[i] += v.drho[i] * (Real(0.5) * dt);
+        v.rho[i] = floor_density(eos, v.rho[i] + v.drho[i] * (Real(0.5) * dt));
       });
 }
 
 template <class Space>
-void symplectic_correct(Space s, ParticleView v, Index begin, Index end, Real dt) {
+void symplectic_correct(Space s, ParticleView v, Index begin, Index end, Real dt, EosParams eos) {
   for_each(
       s, end - begin, SPHDEM_LAMBDA(Index k) {
         const Index i = begin + k;
@@ -300,7 +311,7 @@ void symplectic_correct(Space s, ParticleView v, Index begin, Index end, Real dt
         v.pos[i] = v.ghost[i] + (v_n + v_new) * (Real(0.5) * dt);
         v.vel[i] = v_new;
         const Real eps = -v.drho[i] / v.rho[i] * dt;
-        v.rho[i] = v.rho_prev[i] * (Real(2) - eps) / (Real(2) + eps);
+        v.rho[i] = floor_density(eos, v.rho_prev[i] * (Real(2) - eps) / (Real(2) + eps));
       });
 }
 

@@ -30,6 +30,7 @@ struct StepParams {
   Real delta_h_c0 = 0;                // delta * h * c0
   bool mdbc = true;                   // else plain DBC
   bool free_slip = false;
+  bool no_penetration = false;  // mDBC only (see SphParams)
   Real mdbc_det_min = Real(1e-3);
   bool hbp = false;  // per-particle mu_eff from the HBP model drives the laminar term
   HbpParams hbp_params;

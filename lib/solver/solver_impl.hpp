@@ -111,17 +111,17 @@ class Solver final : public SolverBase {
     ParticleView v = view();
     const Index nf = ps_.n_fluid;
     if (symplectic) {
-      symplectic_predict(Space{}, v, 0, nf, dt);
+      symplectic_predict(Space{}, v, 0, nf, dt, p_.eos);
       refresh_halo(ps_.pos, true);
       refresh_halo(ps_.vel);
       refresh_halo(ps_.rho);
       evaluate_rates();
-      symplectic_correct(Space{}, v, 0, nf, dt);
+      symplectic_correct(Space{}, v, 0, nf, dt, p_.eos);
     } else {
       ++verlet_count_;
       const int every = scene_.time.verlet_euler_every;
       const bool euler = step_ == 0 || (every > 0 && verlet_count_ % every == 0);
-      integrate_verlet(Space{}, v, 0, nf, dt, euler);
+      integrate_verlet(Space{}, v, 0, nf, dt, euler, p_.eos);
     }
     if (!p_.mdbc) {
       integrate_dbc_density(Space{}, v, ps_.wall_begin(), ps_.size(), dt, p_.eos);

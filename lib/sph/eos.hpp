@@ -1,6 +1,8 @@
 // Tait equation of state, seed Eq. (6): p = B [(rho/rho0)^gamma - 1], B = rho0 c0^2 / gamma.
 #pragma once
 
+#include <cmath>
+
 #include "core/hd.hpp"
 #include "core/types.hpp"
 
@@ -15,10 +17,20 @@ struct EosParams {
   // surface flow thinning to a film of one or two particles otherwise reaches large negative
   // pressures and clumps (tensile instability). Default: no limit.
   Real p_min = Real(-1e30);
+  // The density at p_min (0 without a floor). A fluid particle's density is kept at or above it:
+  // below, the pressure no longer resists expansion, and a spreading film's density would drift
+  // without bound (to the density guard) while carrying no force.
+  Real rho_floor = 0;
 };
 
 inline EosParams make_eos(Real rho0, Real c0, Real gamma, Real p_min = Real(-1e30)) {
-  return EosParams{rho0, c0, gamma, rho0 * c0 * c0 / gamma, p_min};
+  EosParams e{rho0, c0, gamma, rho0 * c0 * c0 / gamma, p_min, 0};
+  if (p_min > -e.b) e.rho_floor = rho0 * std::pow(Real(1) + p_min / e.b, Real(1) / gamma);
+  return e;
+}
+
+SPHDEM_HD inline Real floor_density(const EosParams& e, Real rho) {
+  return rho < e.rho_floor ? e.rho_floor : rho;
 }
 
 SPHDEM_HD inline Real tait_pressure(const EosParams& e, Real rho) {

@@ -131,4 +131,30 @@ SPHDEM_HD inline Vec3 mdbc_boundary_velocity(const MdbcSums& s, const Vec3& v_wa
   return v_wall + (vg - vn) - vn;
 }
 
+// Penetration control (sph.no_penetration), for a fluid particle f and a wall particle b.
+//
+// mDBC gives a wall particle the density extrapolated from the fluid near its ghost node, never
+// below rho0. Where that fluid is a thin sheet at about zero pressure (the thinning tail of a
+// release, a film on a slope), the wall then exerts no pressure at all, and two things carry the
+// sheet into it: gravity, and the sheet's own tension (p < 0 in the pair term attracts the fluid
+// particle to the wall particle). DualSPHysics 5.4 added a penetration control to mDBC for this.
+// Ours has two parts:
+//   - walls push, never pull: across a fluid-wall pair the fluid's pressure counts only if > 0;
+//   - a fluid particle moving toward the wall, u = (v_f - v_b) . n < 0 with n the wall normal
+//     turned toward f, sees in the continuity equation a wall that approaches it at the mirrored
+//     speed (as a mirror particle would): the relative velocity's normal part is 2u. Its density
+//     and pressure rise as it closes in, and the pair's pressure term pushes it back. Fluid at
+//     rest or moving away is unaffected (hydrostatics unchanged).
+// v_fb = v_f - v_b, r_fb = r_f - r_b, n_b: the wall particle's normal (either orientation).
+SPHDEM_HD inline Vec3 wall_continuity_velocity(const Vec3& v_fb, const Vec3& r_fb,
+                                               const Vec3& n_b) {
+  const Vec3 n = dot(r_fb, n_b) < Real(0) ? -n_b : n_b;
+  const Real u = dot(v_fb, n);
+  return u < Real(0) ? v_fb + n * u : v_fb;
+}
+
+SPHDEM_HD inline Real wall_pair_pressure(Real p_fluid) {
+  return p_fluid > Real(0) ? p_fluid : 0;
+}
+
 }  // namespace sphdem

@@ -62,6 +62,47 @@ TEST(SphEos, PressureFloor) {
   EXPECT_LT(tait_pressure(make_eos(1000, 30, 7), 900), -500);  // default: no floor
 }
 
+// With a pressure floor the density is kept at the floor's density: below it the pressure no
+// longer resists expansion. Without a floor nothing is clamped.
+TEST(SphEos, DensityFloorMatchesThePressureFloor) {
+  const EosParams e = make_eos(1000, 30, 7, -500);
+  EXPECT_NEAR(tait_pressure(e, e.rho_floor), -500, 1e-8);
+  EXPECT_LT(e.rho_floor, 1000);
+  EXPECT_DOUBLE_EQ(floor_density(e, 900), e.rho_floor);
+  EXPECT_DOUBLE_EQ(floor_density(e, 1001), 1001);
+  const EosParams zero = make_eos(1300, 30, 7, 0);
+  EXPECT_DOUBLE_EQ(zero.rho_floor, 1300);
+  EXPECT_DOUBLE_EQ(floor_density(make_eos(1000, 30, 7), 500), 500);
+}
+
+// Penetration control: a fluid particle closing on a wall sees the wall approach at the mirrored
+// speed (normal relative velocity doubled), whichever way the wall particle's normal points;
+// tangential motion and motion away from the wall are unchanged. Walls never pull.
+TEST(SphMdbc, PenetrationControlMirrorsOnlyApproach) {
+  const Vec3 n(0, 0, 1);             // wall normal (floor)
+  const Vec3 r_fb(0.001, 0, 0.004);  // the fluid particle above the wall particle
+  for (const Vec3 nb : {n, Vec3(0, 0, -1)}) {
+    const Vec3 in = wall_continuity_velocity(Vec3(0.3, 0.1, -0.2), r_fb, nb);
+    EXPECT_DOUBLE_EQ(in.x, 0.3);
+    EXPECT_DOUBLE_EQ(in.y, 0.1);
+    EXPECT_DOUBLE_EQ(in.z, -0.4);
+    const Vec3 out = wall_continuity_velocity(Vec3(0.3, 0.1, 0.2), r_fb, nb);
+    EXPECT_DOUBLE_EQ(out.z, 0.2);
+  }
+  // A fluid particle on the other face of a thin wall (below it) approaching from below.
+  const Vec3 below = wall_continuity_velocity(Vec3(0, 0, 0.5), Vec3(0, 0, -0.004), n);
+  EXPECT_DOUBLE_EQ(below.z, 1.0);
+  // The continuity rate of the approaching pair rises (density builds as it closes in).
+  const KernelParams k = make_kernel(3, 0.005);
+  const Real r = norm(r_fb), f = kernel_f(k, r);
+  const Vec3 v(0, 0, -0.2);
+  EXPECT_GT(continuity_ij(1.0, wall_continuity_velocity(v, r_fb, n), r_fb, f),
+            continuity_ij(1.0, v, r_fb, f));
+  EXPECT_GT(continuity_ij(1.0, v, r_fb, f), 0.0);
+  EXPECT_DOUBLE_EQ(wall_pair_pressure(-150), 0);
+  EXPECT_DOUBLE_EQ(wall_pair_pressure(80), 80);
+}
+
 TEST(SphContinuity, DiffusionRaisesTheLowerDensity) {
   const KernelParams k = make_kernel(2, 0.01);
   const EosParams e = make_eos(1000, 20, 7);
