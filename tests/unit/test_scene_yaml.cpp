@@ -70,7 +70,8 @@ const BadFile kBadFiles[] = {
     {"checkpoint_negative.yaml",
      ":6: checkpoint.every_steps: value -5 is out of range; allowed [0, 2e9]"},
     {"unknown_nested_key.yaml",
-     ":5: sph.dpp: unknown key; allowed keys: dp, h_factor, boundary, slip, boundary_layers"},
+     ":5: sph.dpp: unknown key; allowed keys: dp, h_factor, boundary, slip, boundary_layers, "
+     "no_penetration"},
     {"unknown_deep_key.yaml",
      ":8: fluid.viscosity.mu: unknown key; allowed keys: model, nu, alpha"},
     {"wrong_type_number.yaml", ":6: time.end: expected a number, got 'soon'"},
@@ -208,7 +209,7 @@ TEST(SceneYamlBadOverride, GivesExactMessage) {
        "laminar, artificial"},
       {{"sph={dpp: 1}"},
        "--set sph={dpp: 1}: sph.dpp: unknown key; allowed keys: dp, h_factor, boundary, slip, "
-       "boundary_layers"},
+       "boundary_layers, no_penetration"},
       {{"domain={lo: [0, 0, 0]}"},
        "--set domain={lo: [0, 0, 0]}: domain.hi: required key is missing"},
       {{"diagnostics.forces[0].solid=tnk"},
