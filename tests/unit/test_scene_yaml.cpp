@@ -199,6 +199,9 @@ TEST(SceneYamlBadOverride, GivesExactMessage) {
   const std::string path = input_scene("hydrostatic_tank_2d.yaml");
   const std::vector<BadOverride> cases = {
       {{"sph.dpp=0.1"}, "--set sph.dpp=0.1: unknown key 'sph.dpp'"},
+      {{"sph.boundary=dbc", "sph.no_penetration=true"},
+       "--set sph.no_penetration=true: sph.no_penetration: the penetration control is part of "
+       "mDBC (boundary: mdbc); DBC walls resist approach through their own density"},
       {{"foo.bar=1"}, "--set foo.bar=1: unknown key 'foo.bar'"},
       {{"solids[0].shape.radius=1"},
        "--set solids[0].shape.radius=1: unknown key 'solids[0].shape.radius'"},
