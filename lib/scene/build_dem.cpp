@@ -136,7 +136,11 @@ DemBuild build_dem(const Scene& scene, std::ostream& log) {
       log << where << ": solid fraction " << p.fraction << " of the box (" << v_box << " m^3) -> "
           << count << " grains of " << v_grain << " m^3 (fraction " << Real(count) * v_grain / v_box
           << ")\n";
-      if (count == 0) continue;
+      if (count == 0)
+        throw InputError(where + ": fraction " + std::to_string(p.fraction) +
+                         " of the box is less than half a grain (" + std::to_string(v_grain) +
+                         " m^3 each, box " + std::to_string(v_box) +
+                         " m^3): raise the fraction or give a count");
     }
     std::mt19937 rng(p.seed);
     if (p.placement == "random") {

@@ -619,15 +619,20 @@ class Solver final : public SolverBase {
     return w;
   }
 
-  // Appends walls after the fluid and halo of a host set that has none.
-  static void append_walls(ParticleSet<Host>& ps, ParticleSet<Host>&& w) {
-    std::vector<void*> src;
-    w.for_each_field([&](const char*, auto& b) { src.push_back(&b); });
+  // Appends every field of `src` to the end of `ps` (counts are the caller's).
+  static void append_fields(ParticleSet<Host>& ps, ParticleSet<Host>& src) {
+    std::vector<void*> from;
+    src.for_each_field([&](const char*, auto& b) { from.push_back(&b); });
     std::size_t k = 0;
     ps.for_each_field([&](const char*, auto& b) {
-      auto* s = static_cast<std::decay_t<decltype(b)>*>(src[k++]);
+      auto* s = static_cast<std::decay_t<decltype(b)>*>(from[k++]);
       b.vec().insert(b.vec().end(), s->vec().begin(), s->vec().end());
     });
+  }
+
+  // Appends walls after the fluid and halo of a host set that has none.
+  static void append_walls(ParticleSet<Host>& ps, ParticleSet<Host>&& w) {
+    append_fields(ps, w);
     ps.n_wall = w.n_wall;
   }
 
@@ -724,13 +729,7 @@ class Solver final : public SolverBase {
   }
 
   static void append_grains(ParticleSet<Host>& ps, ParticleSet<Host>&& g) {
-    std::vector<void*> src;
-    g.for_each_field([&](const char*, auto& b) { src.push_back(&b); });
-    std::size_t k = 0;
-    ps.for_each_field([&](const char*, auto& b) {
-      auto* s = static_cast<std::decay_t<decltype(b)>*>(src[k++]);
-      b.vec().insert(b.vec().end(), s->vec().begin(), s->vec().end());
-    });
+    append_fields(ps, g);
     ps.n_grain = g.n_grain;
   }
 

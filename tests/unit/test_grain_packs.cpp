@@ -110,6 +110,9 @@ TEST(GrainPacks, ImpossiblePacksAreNamed) {
   EXPECT_NE(m.find("not both"), std::string::npos) << m;
   m = message(std::string("{shape: bead, fraction: 0.5, ") + kBox + "}");
   EXPECT_NE(m.find("fraction"), std::string::npos) << m;
+  m = message(std::string("{shape: bead, fraction: 0.0001, ") + kBox + "}");
+  EXPECT_NE(m.find("dem.packs[0]: fraction"), std::string::npos) << m;
+  EXPECT_NE(m.find("less than half a grain"), std::string::npos) << m;
   m = message(std::string("{shape: bead, count: 3, placement: poisson, ") + kBox + "}");
   EXPECT_NE(m.find("placement"), std::string::npos) << m;
   EXPECT_NE(m.find("poisson"), std::string::npos) << m;

@@ -92,6 +92,27 @@ PairSet cell_list_pairs(const CellGrid& g, Cloud c, Real radius, Index begin = 0
   return out;
 }
 
+// Sorts a cloud with the cell list (positions and ids permuted, cells marked): a whole range at
+// slot 0.
+struct SortedCloud {
+  Buffer<Vec3, Host> pos;
+  Buffer<GlobalId, Host> id;
+  CellList<Host> cl;
+};
+SortedCloud sort_cloud(const CellGrid& g, const Cloud& c) {
+  SortedCloud sc;
+  sc.pos.vec() = c.pos;
+  sc.id.vec() = c.id;
+  const Index n = Index(c.pos.size());
+  sort_cells(Host{}, g, sc.pos.data(), sc.id.data(), GlobalId(100000), 0, n, sc.cl);
+  Buffer<Vec3, Host> s1;
+  Buffer<GlobalId, Host> s2;
+  permute_range(Host{}, sc.pos, sc.cl, s1);
+  permute_range(Host{}, sc.id, sc.cl, s2);
+  mark_cells(Host{}, g, sc.cl);
+  return sc;
+}
+
 TEST(Neighbors, MatchBruteForce3D) {
   const bool per[3] = {false, false, false};
   const Real radius = 0.1;
@@ -179,18 +200,10 @@ TEST(Neighbors, SumsAreBitIdenticalAcrossRuns) {
   const CellGrid g = make_cell_grid(3, Vec3(0, 0, 0), Vec3(1, 1, 1), radius, per);
   auto run = [&]() {
     const Cloud c = random_cloud(3, 3000, Vec3(0, 0, 0), Vec3(1, 1, 1), 7);
-    Buffer<Vec3, Host> pos;
-    pos.vec() = c.pos;
-    Buffer<GlobalId, Host> id;
-    id.vec() = c.id;
-    CellList<Host> cl;
+    SortedCloud sc = sort_cloud(g, c);
+    Buffer<Vec3, Host>& pos = sc.pos;
+    CellList<Host>& cl = sc.cl;
     const Index n = Index(c.pos.size());
-    sort_cells(Host{}, g, pos.data(), id.data(), GlobalId(100000), 0, n, cl);
-    Buffer<Vec3, Host> s1;
-    Buffer<GlobalId, Host> s2;
-    permute_range(Host{}, pos, cl, s1);
-    permute_range(Host{}, id, cl, s2);
-    mark_cells(Host{}, g, cl);
     const Vec3* p = pos.data();
     const CellListView v = cl.view();
     std::vector<double> per_particle(static_cast<std::size_t>(n));
@@ -236,18 +249,10 @@ TEST(Neighbors, EmptyBlocksSkipOnlyQueriesWithNoNeighbours) {
       c.pos.push_back(c2.pos[a]);
       c.id.push_back(c2.id[a] + 50000);
     }
-    Buffer<Vec3, Host> pos;
-    pos.vec() = c.pos;
-    Buffer<GlobalId, Host> id;
-    id.vec() = c.id;
-    CellList<Host> cl;
-    const Index n = Index(c.pos.size());
-    sort_cells(Host{}, g, pos.data(), id.data(), GlobalId(100000), 0, n, cl);
-    Buffer<Vec3, Host> s1;
-    Buffer<GlobalId, Host> s2;
-    permute_range(Host{}, pos, cl, s1);
-    permute_range(Host{}, id, cl, s2);
-    mark_cells(Host{}, g, cl);
+    SortedCloud sc = sort_cloud(g, c);
+    Buffer<Vec3, Host>& pos = sc.pos;
+    Buffer<GlobalId, Host>& id = sc.id;
+    CellList<Host>& cl = sc.cl;
     mark_blocks(Host{}, g, cl);
     const auto empty = std::count(cl.occupied.vec().begin(), cl.occupied.vec().end(), 0);
     ASSERT_GT(empty, 0) << "dim " << k.dim << " reach " << k.reach;
