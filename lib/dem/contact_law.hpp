@@ -15,6 +15,12 @@
 // (validation FORMULAS.md §7):
 //   zeta = -ln e / sqrt(pi^2 + ln^2 e),  c_n = 2 zeta sqrt(m* k_n),
 //   t_c  = pi / (omega_0 sqrt(1 - zeta^2)),  omega_0 = sqrt(k_n / m*).
+// For a level-set node m* is the mass the node sees (m_point, rotation included; see
+// at_point_mass below): a node at a lever arm r from the centroid of a grain of radius of gyration
+// k moves like a mass m / (1 + (r x n)^2 / k^2), up to 8x lighter than m at a pyramid's tip. A
+// dashpot sized with the centroid mass then overdamps that point and the explicit step makes it
+// unstable: a settled pile of 120 pyramids kept KE ~ 1e-5 J at dt = t_c/50, and came to rest
+// (1e-22 J) only at t_c/100 (docs/VALIDATION.md, "Rock collapse").
 // The contact ends when the OVERLAP returns to zero; the small tensile dashpot force at the end is
 // kept (no clamp), so the restitution coefficient comes out exactly e (clamping F_n >= 0 would give
 // a larger e, FORMULAS.md §7).
@@ -209,6 +215,19 @@ struct PairLaw {
   Real m_eff = 0;                   // effective mass m* of the pair
   bool tangential_damping = false;  // Hertz: tangential dashpot alpha sqrt(m* k_t)
 };
+
+// The law of one contact point whose effective mass (rotation included) is m_point, e.g.
+// 1 / (inverse_point_mass(a) + inverse_point_mass(b)): the dashpots scale as sqrt(m*), so the
+// point rebounds with the restitution coefficient e whatever its lever arm. m_point <= 0 or
+// infinite keeps the law.
+SPHDEM_HD inline PairLaw at_point_mass(PairLaw p, Real m_point) {
+  if (!(m_point > Real(0)) || std::isinf(m_point) || !(p.m_eff > Real(0))) return p;
+  const Real scale = std::sqrt(m_point / p.m_eff);
+  p.cn *= scale;
+  p.ct *= scale;
+  p.m_eff = m_point;
+  return p;
+}
 
 // Force on the master body of one contact of overlap d > 0, normal n (slave -> master) and relative
 // velocity v_rel; advances the tangential spring s by dt. Writes the normal force magnitude.

@@ -378,7 +378,9 @@ void DemSystem::compute_forces(Real dt) {
         const ContactKey key{m.id, s.id, std::uint32_t(k)};
         const Vec3* old = find_spring(key);
         Vec3 spring = old ? *old : Vec3();
-        const Vec3 f = Real(0.5) * contact_force(law, d, nrm, v_rel, dt, spring, nullptr);
+        const Real inv_m = inverse_point_mass(m, x, nrm) + inverse_point_mass(s, x, nrm);
+        const Vec3 f = Real(0.5) * contact_force(at_point_mass(law, Real(1) / inv_m), d, nrm, v_rel,
+                                                 dt, spring, nullptr);
         load_m.add(f, x, m.x);
         load_s.add(-f, x, s.x);
         out.max_d = std::max(out.max_d, d);
@@ -434,7 +436,8 @@ void DemSystem::compute_forces(Real dt) {
           const ContactKey key{b.id, wkey, std::uint32_t(k)};
           const Vec3* old = find_spring(key);
           Vec3 s = old ? *old : Vec3();
-          load.add(contact_force(law, -ph, nrm, v_rel, dt, s, nullptr), x, b.x);
+          const PairLaw lp = at_point_mass(law, Real(1) / inverse_point_mass(b, x, nrm));
+          load.add(contact_force(lp, -ph, nrm, v_rel, dt, s, nullptr), x, b.x);
           wmax[i] = std::max(wmax[i], -ph);
           whist[i].push_back({key, s});
         }

@@ -77,6 +77,17 @@ SPHDEM_HD inline Real contact_mass(const RigidBody& b) {
   return b.motion == Motion::kFree ? b.mass : Real(0);
 }
 
+// Inverse of the mass that a contact at world point p with unit normal n sees on this body:
+// 1/m + u.I_b^-1 u with u = R(q)^T ((p - x) x n), the rotation about the centroid included
+// (a force at a lever arm moves the point more than the centroid). 0 for fixed and prescribed
+// bodies (infinite mass).
+SPHDEM_HD inline Real inverse_point_mass(const RigidBody& b, const Vec3& p, const Vec3& n) {
+  if (b.motion != Motion::kFree) return Real(0);
+  const Vec3 u = rotate(conjugate(b.q), cross(p - b.x, n));
+  return Real(1) / b.mass + u.x * u.x / b.inertia.x + u.y * u.y / b.inertia.y +
+         u.z * u.z / b.inertia.z;
+}
+
 // Implicit-midpoint update of the body-frame angular velocity (see header). torque_body: the
 // torque in the body frame. Returns the midpoint rate w_m; writes w+ into *w.
 SPHDEM_HD inline Vec3 euler_midpoint(Vec3* w, const Vec3& inertia, const Vec3& torque_body,
