@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "dem/contact_law.hpp"
+#include "dem/rigid_body.hpp"
 
 namespace sphdem::dem {
 namespace {
@@ -172,6 +173,42 @@ TEST(DemContactLaw, ContactForcePushesMasterOutAndDampsApproach) {
   Vec3 s2;
   const Vec3 fh = contact_force(p, 1e-4, Vec3(1, 0, 0), Vec3(0, 0, 0), 1e-4, s2, &fn);
   EXPECT_NEAR(fh.x, p.k_hertz * 1e-6, 1e-9 * p.k_hertz * 1e-6);
+}
+
+// A contact point at a lever arm sees a lighter body: for a rod of mass m and length L
+// (I = m L^2 / 12 about its middle) pushed at its end across its axis, 1/m_pt = 1/m + (L/2)^2/I
+// = 4/m. Through the centroid, or along the rod, it sees m. The dashpot of the point then scales
+// so the point's own oscillator keeps the restitution coefficient: c = 2 zeta sqrt(m_pt k_n).
+TEST(DemContactLaw, PointMassIncludesRotationAndRescalesTheDashpot) {
+  RigidBody rod;
+  rod.mass = 2;
+  const Real len = 0.3;
+  rod.inertia = Vec3(1e-6, rod.mass * len * len / 12, rod.mass * len * len / 12);  // along x
+  rod.q = normalize(Quat{0.8, 0.2, -0.4, 0.1});
+  const Vec3 axis = rotate(rod.q, Vec3(1, 0, 0));
+  const Vec3 across = rotate(rod.q, Vec3(0, 0, 1));
+  rod.x = Vec3(1, 2, 3);
+  const Vec3 tip = rod.x + Real(0.5) * len * axis;
+  EXPECT_NEAR(inverse_point_mass(rod, tip, across), 4 / rod.mass, 1e-12);
+  EXPECT_NEAR(inverse_point_mass(rod, tip, axis), 1 / rod.mass, 1e-12);
+  EXPECT_NEAR(inverse_point_mass(rod, rod.x, across), 1 / rod.mass, 1e-12);
+  rod.motion = Motion::kFixed;
+  EXPECT_EQ(inverse_point_mass(rod, tip, across), 0);
+
+  PairLaw p;
+  p.kn = 800;
+  p.m_eff = 1e-3;
+  p.cn = linear_damping(0.3, p.m_eff, p.kn);
+  p.kt = 600;
+  p.ct = linear_damping(0.3, p.m_eff, p.kt);
+  const PairLaw q = at_point_mass(p, 0.25e-3);
+  EXPECT_NEAR(q.cn, linear_damping(0.3, 0.25e-3, p.kn), 1e-12 * p.cn);
+  EXPECT_NEAR(q.ct, linear_damping(0.3, 0.25e-3, p.kt), 1e-12 * p.ct);
+  EXPECT_EQ(q.m_eff, Real(0.25e-3));
+  EXPECT_EQ(q.kn, p.kn);
+  // An infinite or unknown point mass keeps the law.
+  EXPECT_EQ(at_point_mass(p, Real(1) / Real(0)).cn, p.cn);
+  EXPECT_EQ(at_point_mass(p, 0).cn, p.cn);
 }
 
 }  // namespace
