@@ -133,11 +133,13 @@ def chart(study, out):
             sel = [r for r in rows if r["dp"] == dpv]
             for r in sel:
                 ax.plot(float(r["steps"]), float(r[key]), mk, ms=6,
-                        color="C0" if r["slip"] == "noslip" else "C3")
+                        color="C3" if r["slip"] != "noslip" else
+                        "C2" if r.get("p_min") == "0" else "C0")
                 ax.annotate(r["case"], (float(r["steps"]), float(r[key])), fontsize=6,
                             xytext=(3, 3), textcoords="offset points")
         ax.set_xscale("log")
-        ax.set_xlabel("steps to the end of the run (o: dp 5 mm, square: dp 2.5 mm)")
+        ax.set_xlabel("steps (o: dp 5 mm, square: 2.5 mm)\n"
+                      "blue: no tension floor, green: p_min = 0, red: free-slip floor", fontsize=8)
         ax.set_ylabel(name)
         ax.legend(fontsize=7)
     axes[0].set_title("run-out; reference Lube et al. 2005", fontsize=9)

@@ -1,8 +1,8 @@
 // 2D granular column collapse (Bui et al. 2008 set-up) with HBP + Mohr-Coulomb: run-out, height
 // and failure line against the scaling laws and the Rankine angle, the end of the collapse and
 // the time to rest. Writes <prefix>_final.csv (x0, z0, x, z, final displacement, displacement at
-// the end of the collapse per particle) for app/plot_collapse.py, and <prefix>_history.csv
-// (t, KE/(m g H0), front, height at the wall every 5 ms).
+// the end of the collapse, final velocity and pressure per particle) for app/plot_collapse.py, and
+// <prefix>_history.csv (t, KE/(m g H0), front, height at the wall every 5 ms).
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -37,6 +37,7 @@ constexpr double kStopRatio = 1e-3;
 
 struct Collapse {
   double runout = 0, height = 0, failure_deg = 0, kinetic_ratio = 0;
+  double slope_deg = 0;  // free surface of the deposit, fitted where 0.2 H < h < 0.8 H
   double t_rest = std::numeric_limits<double>::quiet_NaN();  // NaN: not at rest at the end
   double t_stop = std::numeric_limits<double>::quiet_NaN();  // NaN: still collapsing at the end
   std::int64_t steps = 0;
@@ -101,6 +102,22 @@ Collapse run_collapse(const std::vector<std::string>& ov, const std::string& pre
     c.runout = x;
   }
   c.height = probe_surface_height(ps, p, 0.5 * dp, 0);
+  // Surface slope: a line fitted to the kernel surface height h(x) where it lies between 0.2 and
+  // 0.8 of the height at the wall (the flank between the plateau and the toe).
+  {
+    double n = 0, sx = 0, sh = 0, sxx = 0, sxh = 0;
+    for (double x = 0.005; x < c.runout; x += dp / 4) {
+      const double h = probe_surface_height(ps, p, x, 0);
+      if (!(h > 0.2 * c.height && h < 0.8 * c.height)) continue;
+      n += 1;
+      sx += x;
+      sh += h;
+      sxx += x * x;
+      sxh += x * h;
+    }
+    c.slope_deg = n > 2 ? -std::atan((n * sxh - sx * sh) / (n * sxx - sx * sx)) * 180 / kPi
+                        : std::numeric_limits<double>::quiet_NaN();
+  }
   // Failure line: at the end of the collapse (or at the end of the run if it never stopped),
   // in each initial row, the unmoved particles (displacement under kMoved) that
   // reach out from the wall without a moved one between; a line fitted to the rows' outermost
@@ -109,13 +126,13 @@ Collapse run_collapse(const std::vector<std::string>& ov, const std::string& pre
   // wedge and the angle is NaN.
   std::map<long, std::map<double, double>> rows;  // row -> x0 -> displacement
   std::ofstream f(prefix + "_final.csv");
-  f << "x0,z0,x,z,displacement,displacement_at_stop\n";
+  f << "x0,z0,x,z,displacement,displacement_at_stop,vx,vz,pressure\n";
   for (Index i = 0; i < ps.n_fluid; ++i) {
     const Vec3 x0 = start.at(ps.id[i]);
     const double d_end = norm(ps.pos[i] - x0);
     const double d = stop_disp.empty() ? d_end : stop_disp.at(ps.id[i]);
     f << x0.x << ',' << x0.z << ',' << ps.pos[i].x << ',' << ps.pos[i].z << ',' << d_end << ',' << d
-      << '\n';
+      << ',' << ps.vel[i].x << ',' << ps.vel[i].z << ',' << ps.press[i] << '\n';
     rows[std::lround(x0.z / dp - 0.5)][x0.x] = d;
   }
   std::vector<double> zs, xs;
@@ -151,11 +168,10 @@ Collapse run_collapse(const std::vector<std::string>& ov, const std::string& pre
   c.wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::printf(
       "column collapse dp=%.4f: %lld steps, %.0f s wall, run-out %.3f m ((L-L0)/L0 = %.2f), "
-      "height %.4f m (H/H0 = %.2f), failure line %.1f deg, KE/(m g H0) = %.2e, collapse ends %.2f "
-      "s, "
-      "rest at %.2f s\n",
+      "height %.4f m (H/H0 = %.2f), surface slope %.1f deg, failure line %.1f deg, KE/(m g H0) = "
+      "%.2e, collapse ends %.2f s, rest at %.2f s\n",
       dp, static_cast<long long>(c.steps), c.wall, c.runout, (c.runout - kL0) / kL0, c.height,
-      c.height / kH0, c.failure_deg, c.kinetic_ratio, c.t_stop, c.t_rest);
+      c.height / kH0, c.slope_deg, c.failure_deg, c.kinetic_ratio, c.t_stop, c.t_rest);
   return c;
 }
 
@@ -168,18 +184,42 @@ std::vector<std::string> split(const char* s) {
   return out;
 }
 
+// The shipped scene (inputs/column_collapse_2d.yaml: dp = 5 mm, m = 100 s, mu_max = 1000 Pa s,
+// no tension) comes to rest, and its deposit is what a frictional material with phi = 19.8 deg
+// can hold: the column's height stays (Nguyen et al. 2015, H/H0 = 1 within 10%), the flank is
+// no steeper than the friction angle (a cohesionless slope at rest cannot be; +2 deg for a line
+// fitted to kernel surface heights good to ~dp/4 over ~0.1 m), and an unmoved wedge stands at the
+// wall with its edge steeper than the friction angle. The run-out against Lube et al. (2005) and
+// the wedge against Rankine are printed, not asserted: the HBP fluid misses both
+// (DISABLED_HeapAgainstScalingLawsAndRankine; docs/VALIDATION.md).
+TEST(ColumnCollapse, ShippedSceneComesToRestHoldingItsHeight) {
+  const Collapse c = run_collapse({}, "column_collapse_shipped");
+  const double phi = 19.8;
+  std::printf(
+      "against the references: run-out %.2f (Lube 0.60), H/H0 %.2f (Nguyen 1.0), wedge "
+      "%.1f deg (Rankine %.1f), flank %.1f deg (phi %.1f)\n",
+      (c.runout - kL0) / kL0, c.height / kH0, c.failure_deg, 45 + phi / 2, c.slope_deg, phi);
+  EXPECT_LT(c.kinetic_ratio, kRestRatio) << "not at rest at the end";
+  EXPECT_FALSE(std::isnan(c.t_rest));
+  EXPECT_NEAR(c.height / kH0, 1.0, 0.1);
+  EXPECT_GT(c.slope_deg, 0.0);
+  EXPECT_LE(c.slope_deg, phi + 2.0);
+  ASSERT_FALSE(std::isnan(c.failure_deg)) << "no unmoved wedge at the wall";
+  EXPECT_GT(c.failure_deg, phi);
+  EXPECT_LT(c.failure_deg, 90.0);
+}
+
 // Disabled: no setting measured reaches the references (docs/VALIDATION.md, "Granular column
 // collapse"). The seed's m = 0.15 s never comes to rest (run-out 1.21, H/H0 0.58). This runs the
-// closest setting at rest, m = 100 s with mu_max = 3000 Pa s at dp = 5 mm (100,573 steps): it
-// holds the height (H/H0 0.94) but runs out 0.80 and its unmoved region's edge fits 32 deg, so
-// it fails the run-out and failure-line checks (a fitted K = 10 Pa s with mu_max = 1000 meets
-// run-out and height, not the failure line). The tolerances are what a passing model must
-// meet, not fitted to these runs:
+// shipped scene with mu_max = 3000 Pa s (100,573 steps), the stiffest setting measured at rest:
+// it held the height (H/H0 0.94) but ran out 0.80 and its unmoved region's edge fitted 32 deg, so
+// it fails the run-out and failure-line checks (measured before fluid.p_min = 0 entered the
+// scene; a fitted K = 10 Pa s with mu_max = 1000 met run-out and height, not the failure line).
+// The tolerances are what a passing model must meet, not fitted to these runs:
 //   build/tests/validation_tests --gtest_also_run_disabled_tests
 //     --gtest_filter='ColumnCollapse.DISABLED_HeapAgainstScalingLawsAndRankine'
 TEST(ColumnCollapse, DISABLED_HeapAgainstScalingLawsAndRankine) {
-  const Collapse c = run_collapse(
-      {"sph.dp=0.005", "fluid.rheology.m=100", "fluid.rheology.mu_max=3000"}, "column_collapse");
+  const Collapse c = run_collapse({"fluid.rheology.mu_max=3000"}, "column_collapse");
   EXPECT_LT(c.kinetic_ratio, kRestRatio);  // at rest
   const double a = 0.5;
   // Lube et al. 2005: (L - L0)/L0 = 1.2 a = 0.6, within 20% (the scatter of the fit).
