@@ -364,12 +364,21 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
       br.grain = coupling->particle_count();
     };
   }
-  auto solver = make_solver(scene, opt.backend, slog, &rep, &ex, opt.procs, prepare);
+  // dem.subcycle: false runs both phases on one step: the fluid step is capped at the DEM step.
+  Scene capped;
+  const bool one_step = coupling && !scene.dem.subcycle;
+  if (one_step) {
+    capped = scene;
+    capped.time.dt_max = scene.time.dt_max > 0 ? std::min(scene.time.dt_max, dem.dt) : Real(dem.dt);
+  }
+  auto solver =
+      make_solver(one_step ? capped : scene, opt.backend, slog, &rep, &ex, opt.procs, prepare);
   std::vector<Vec3> grain_force, grain_torque;
   if (coupling) {
     slog << "grains: " << dem.system->bodies().size() << " in the fluid, "
          << coupling->particle_count() << " grain boundary particles; DEM step " << dem.dt
-         << " s, sub-cycled within each fluid step\n";
+         << (one_step ? " s, one step for both phases (dem.subcycle: false)\n"
+                      : " s, sub-cycled within each fluid step\n");
   }
   MPI_Comm comm = ex ? ex->comm() : MPI_COMM_SELF;
   // What this rank writes (checkpoints, frames), and what rank 0 evaluates diagnostics on.

@@ -705,11 +705,13 @@ void Parser::parse_sph(const Field& f) {
 
 void Parser::parse_time(const Field& f) {
   TimeParams& p = scene_->time;
-  MapReader m = map(f, {"end", "cfl", "dt_fixed", "dt_min", "integrator", "verlet_euler_every"});
+  MapReader m =
+      map(f, {"end", "cfl", "dt_fixed", "dt_min", "dt_max", "integrator", "verlet_euler_every"});
   p.end = m.number("end", left_open(0, 1e6));
   p.cfl = m.number("cfl", left_open(0, 1), p.cfl);
   p.dt_fixed = m.number("dt_fixed", closed(0, 1), p.dt_fixed);
   p.dt_min = m.number("dt_min", closed(0, 1), p.dt_min);
+  p.dt_max = m.number("dt_max", closed(0, 1), p.dt_max);
   p.integrator = m.enumeration("integrator", kIntegrators, p.integrator);
   p.verlet_euler_every = m.integer("verlet_euler_every", 1, 1000000, p.verlet_euler_every);
   if (p.dt_fixed > 0 && p.dt_fixed < p.dt_min) {
@@ -896,9 +898,9 @@ void Parser::parse_dem(const Field& f) {
   DemScene& d = scene_->dem;
   d.enabled = true;
   if (dim_ != 3) fail(f, "DEM grains need dimension: 3");
-  MapReader m = map(
-      f, {"grain_grain", "grain_wall", "stiffness_overlap", "nodes_per_contact", "dt_factor",
-          "overlap_max", "settle", "shapes", "packs", "bodies", "walls", "heap", "substeps_max"});
+  MapReader m = map(f, {"grain_grain", "grain_wall", "stiffness_overlap", "nodes_per_contact",
+                        "dt_factor", "overlap_max", "settle", "shapes", "packs", "bodies", "walls",
+                        "heap", "substeps_max", "subcycle"});
   d.grain_grain = parse_contact(m.require("grain_grain"), false);
   d.grain_wall = parse_contact(m.require("grain_wall"), true);
   d.stiffness_overlap = m.number("stiffness_overlap", left_open(0, 1), d.stiffness_overlap);
@@ -906,6 +908,7 @@ void Parser::parse_dem(const Field& f) {
   d.dt_factor = m.number("dt_factor", left_open(0, 100), d.dt_factor);
   d.overlap_max = m.number("overlap_max", left_open(0, 1), d.overlap_max);
   if (auto f_sub = m.find("substeps_max")) d.substeps_max = integer(*f_sub, 1, 1000000);
+  d.subcycle = m.boolean("subcycle", d.subcycle);
   if (auto s = m.find("settle")) {
     MapReader sm = map(*s, {"until", "damping"});
     d.settle_until = sm.number("until", closed(0, 1e6));

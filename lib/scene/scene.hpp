@@ -72,6 +72,7 @@ struct TimeParams {
   Real cfl = 0.2;      // Courant number (Eq. 23)
   Real dt_fixed = 0;   // > 0: fixed time step (verification only)
   Real dt_min = 1e-9;  // floor: a step stuck here is a stability fault
+  Real dt_max = 0;     // > 0: cap on the adaptive step (dem.subcycle: false sets the DEM step)
   Integrator integrator = Integrator::kVerlet;
   int verlet_euler_every = 40;
 };
@@ -284,6 +285,9 @@ struct DemScene {
   std::vector<GrainBody> bodies;
   std::vector<GrainWall> walls;
   int substeps_max = 1000;  // coupled runs: most DEM sub-steps per fluid step
+  // Coupled runs: true = the DEM sub-cycles inside each fluid step; false = one step for both
+  // phases (the fluid step is capped at the DEM step).
+  bool subcycle = true;
   // Heap measurement at the end of the run (diagnostics/heap.hpp): floor height, slope fit window
   // in x, and the x from which the run-out is measured (the baffle).
   bool heap = false;

@@ -301,6 +301,7 @@ class Solver final : public SolverBase {
     }
     Real dt = scene_.time.cfl * std::min(st.dt_force, st.dt_acoustic);
     dt = std::min(dt, st.dt_viscous);
+    if (scene_.time.dt_max > 0) dt = std::min(dt, scene_.time.dt_max);
     if (scene_.time.dt_fixed > 0) dt = scene_.time.dt_fixed;
     st.dt = dt;
     return st;

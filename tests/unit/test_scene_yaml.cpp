@@ -370,11 +370,13 @@ TEST(SceneYamlOverrides, ChangeValues) {
 TEST(SceneYamlOverrides, AddKeysAndSectionsTheFileLacks) {
   Scene s = load_scene(input_scene("dam_break_2d.yaml"),
                        {"guards.mach_max=0.05", "guards.check_every=10", "time.dt_fixed=1e-5",
-                        "domain.periodic=[true, false, false]"});
+                        "time.dt_max=2e-4", "domain.periodic=[true, false, false]"});
   EXPECT_REAL(s.guards.mach_max, 0.05);
   EXPECT_EQ(s.guards.check_every, 10);
   EXPECT_REAL(s.guards.rho_min_ratio, GuardParams().rho_min_ratio);
   EXPECT_REAL(s.time.dt_fixed, 1e-5);
+  EXPECT_REAL(s.time.dt_max, 2e-4);
+  EXPECT_REAL(TimeParams().dt_max, 0);  // no cap unless asked
   EXPECT_TRUE(s.periodic[0]);
 }
 
