@@ -41,8 +41,7 @@ std::vector<std::vector<double>> read_csv(const std::string& path) {
 }
 
 RunResult run(const std::vector<std::string>& overrides, const std::string& out,
-              std::int64_t max_steps = -1, const std::string& restart = "",
-              const std::string& scene = kScene) {
+              std::int64_t max_steps = -1, const std::string& restart = "") {
   if (restart.empty()) fs::remove_all(out);
   RunOptions o;
   o.out_dir = out;
@@ -51,7 +50,7 @@ RunResult run(const std::vector<std::string>& overrides, const std::string& out,
   o.handle_signals = false;
   o.max_steps = max_steps;
   o.restart = restart;
-  return run_scene(load_scene(scene, overrides), o);
+  return run_scene(load_scene(kScene, overrides), o);
 }
 
 struct Window {
@@ -199,7 +198,13 @@ TEST(Coupling, RestartContinuesBitIdentically) {
 TEST(Coupling, SubcyclingMatchesOneStepForLessCost) {
   const std::string scene = std::string(SPHDEM_SOURCE_DIR) + "/inputs/beads_settling.yaml";
   auto go = [&](const char* out, const char* subcycle) {
-    return run({"time.end=0.1", subcycle}, out, -1, "", scene);
+    fs::remove_all(out);
+    RunOptions o;
+    o.out_dir = out;
+    o.backend = Backend::kHost;
+    o.quiet = true;
+    o.handle_signals = false;
+    return run_scene(load_scene(scene, {"time.end=0.1", subcycle}), o);
   };
   const RunResult sub = go("beads_subcycled", "dem.subcycle=true");
   const RunResult one = go("beads_one_step", "dem.subcycle=false");
