@@ -90,6 +90,10 @@ RunResult run_granular(const Scene& scene, const RunOptions& opt) {
   if (opt.backend == Backend::kDevice)
     throw InputError("--backend device: the DEM has no GPU path yet; run '" + scene.name +
                      "' with --backend host or auto");
+  if (!scene.dem.subcycle)
+    throw InputError(scene.source +
+                     ": dem.subcycle: false applies to grains in a fluid (fluid_blocks); a run of "
+                     "grains only has one step already");
   const std::string restart_file = prepare_output(opt);
   const bool restarting = !restart_file.empty();
   Log log(opt.out_dir + "/run.log", opt.quiet, restarting);

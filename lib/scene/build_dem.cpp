@@ -238,6 +238,8 @@ DemBuild build_dem(const Scene& scene, std::ostream& log) {
     out.wall_index.push_back(sys.add_sdf_wall(s->sdf, wall_velocity(w, 0)));
   }
   out.dt = scene.time.dt_fixed > 0 ? scene.time.dt_fixed : d.dt_factor * sys.time_step();
+  if (scene.time.dt_fixed <= 0 && scene.time.dt_max > 0)
+    out.dt = std::min(out.dt, scene.time.dt_max);
   return out;
 }
 

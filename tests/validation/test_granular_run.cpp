@@ -238,6 +238,9 @@ TEST(GranularRun, BadInputIsNamed) {
   expect_input_error(replace(kPile, "restitution: 0.3, friction: 0.5}\n  nodes",
                              "restitution: 1.5, friction: 0.5}\n  nodes"),
                      "dem.grain_wall.restitution");
+  expect_input_error(
+      replace(kPile, "  nodes_per_contact: 3\n", "  nodes_per_contact: 3\n  subcycle: false\n"),
+      "dem.subcycle");
 }
 
 }  // namespace
