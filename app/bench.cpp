@@ -37,6 +37,7 @@ void run_bench(const BenchOptions& opt, std::ostream& os_rank) {
   BuildReport rep;
   auto solver = make_solver(scene, opt.backend, slog, &rep);
   for (int i = 0; i < opt.warmup; ++i) solver->step();
+  if (std::string(solver->space_name()) == "device") cuda::synchronize();
   const PhaseTimes before = solver->phase_times();
   const auto t0 = std::chrono::steady_clock::now();
   for (int i = 0; i < opt.steps; ++i) solver->step();

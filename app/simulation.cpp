@@ -513,6 +513,9 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
   const Real end = scene.time.end;
   double particle_steps = 0;
   std::int64_t steps = 0;
+  const int guard_every = scene.guards.check_every > 0                    ? scene.guards.check_every
+                          : std::string(solver->space_name()) == "device" ? 20
+                                                                          : 1;
   try {
     while (solver->time() < end - Real(1e-12) * end &&
            (opt.max_steps < 0 || steps < opt.max_steps)) {
@@ -564,7 +567,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
         log << "t = " << solver->time() << " s: all fluid has left the domain; stopping\n";
         break;
       }
-      if (scene.guards.check_every > 0 && steps % scene.guards.check_every == 0) {
+      if (steps % guard_every == 0) {
         if (!ex) {
           check_particle_guards(scene, p, solver->host_particles(), solver->time(),
                                 solver->step_count());

@@ -25,6 +25,8 @@ void select_device(int index);
 // Raw device memory, used by Buffer<T, Device>.
 void* device_alloc(std::size_t bytes);
 void device_free(void* p) noexcept;
+// Returns the blocks the device allocator keeps for reuse to the driver.
+void release_cached_memory();
 void copy_to_device(void* dst, const void* src, std::size_t bytes);
 void copy_to_host(void* dst, const void* src, std::size_t bytes);
 void copy_device_to_device(void* dst, const void* src, std::size_t bytes);

@@ -14,8 +14,16 @@ namespace sphdem {
 namespace detail {
 void check_cuda(cudaError_t e, const char* what);
 
+// Blocks of 256 threads. SPHDEM_CUDA_MIN_BLOCKS (a build option) asks ptxas for at least that many
+// resident blocks per multiprocessor, capping the registers of the neighbour loops.
+#ifndef SPHDEM_CUDA_MIN_BLOCKS
+#define SPHDEM_CUDA_MIN_BLOCKS 1
+#endif
+constexpr int kForEachBlock = 256;
+
 template <class F>
-__global__ void for_each_kernel(Index n, F f) {
+__global__ void __launch_bounds__(kForEachBlock, SPHDEM_CUDA_MIN_BLOCKS)
+    for_each_kernel(Index n, F f) {
   const Index i = Index(blockIdx.x) * blockDim.x + threadIdx.x;
   if (i < n) f(i);
 }
@@ -41,7 +49,7 @@ __global__ void reduce_kernel(Index n, Index chunk, F f, T* partial) {
 template <class F>
 void for_each(Device, Index n, const F& f) {
   if (n <= 0) return;
-  constexpr int kBlock = 256;
+  constexpr int kBlock = detail::kForEachBlock;
   const Index blocks = (n + kBlock - 1) / kBlock;
   detail::for_each_kernel<<<unsigned(blocks), kBlock>>>(n, f);
   detail::check_cuda(cudaGetLastError(), "for_each launch");
@@ -62,6 +70,11 @@ T reduce(Device, Index n, const F& f) {
   T acc = Op::template identity<T>();
   for (const T& v : h) acc = Op::combine(acc, v);
   return acc;
+}
+
+// Waits for the kernels queued so far, so that a host clock brackets their run (phase timers).
+inline void fence(Device) {
+  detail::check_cuda(cudaDeviceSynchronize(), "fence");
 }
 
 void sort_pairs_stable(Device, std::uint64_t* keys, std::uint32_t* values, Index n,

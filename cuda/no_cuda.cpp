@@ -23,6 +23,7 @@ void* device_alloc(std::size_t) {
   unavailable();
 }
 void device_free(void*) noexcept {}
+void release_cached_memory() {}
 void copy_to_device(void*, const void*, std::size_t) {
   unavailable();
 }

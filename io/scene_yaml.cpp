@@ -48,7 +48,7 @@
 //     rho_min_ratio: 0.7         # (0, 1)
 //     rho_max_ratio: 1.3         # (1, 10]
 //     mach_max: 0.1              # (0, 1]
-//     check_every: 1             # [1, 1e6] steps
+//     check_every: 0             # [0, 1e6] steps; 0 = auto (host 1, device 20)
 //     penetration_depth: 0.5     # [0, 10] dp; fluid deeper inside a solid is a fault
 //   checkpoint:                  # when to write checkpoints (0 = never by this rule)
 //     every_time: 0              # [0, 1e6] simulated s
@@ -726,7 +726,7 @@ void Parser::parse_guards(const Field& f) {
   p.rho_min_ratio = m.number("rho_min_ratio", open_interval(0, 1), p.rho_min_ratio);
   p.rho_max_ratio = m.number("rho_max_ratio", left_open(1, 10), p.rho_max_ratio);
   p.mach_max = m.number("mach_max", left_open(0, 1), p.mach_max);
-  p.check_every = m.integer("check_every", 1, 1000000, p.check_every);
+  p.check_every = m.integer("check_every", 0, 1000000, p.check_every);
   p.penetration_depth = m.number("penetration_depth", closed(0, 10), p.penetration_depth);
 }
 

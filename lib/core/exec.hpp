@@ -75,6 +75,9 @@ void for_each(Host, Index n, const F& f) {
   for (Index i = 0; i < n; ++i) f(i);
 }
 
+// Waits until the space's queued work is done; phase timers read the clock after it (Host: no-op).
+inline void fence(Host) {}
+
 // Number of chunks of a deterministic reduction; fixed so results do not depend on threads.
 constexpr Index kReduceChunks = 256;
 

@@ -80,8 +80,12 @@ struct TimeParams {
 struct GuardParams {
   Real rho_min_ratio = 0.7;  // density outside [rho_min_ratio, rho_max_ratio] * rho0 is a fault
   Real rho_max_ratio = 1.3;
-  Real mach_max = 0.1;           // v_max / c0 above this is a fault
-  int check_every = 1;           // steps between guard checks
+  Real mach_max = 0.1;  // v_max / c0 above this is a fault
+  // Steps between the per-particle guard checks (penetration into solids, the particle's id).
+  // 0 = auto: every step on the host, every 20 steps on the device, where the check costs a
+  // download of every particle (38 ms of a 50 ms step at 1 M particles on an H200). The density,
+  // Mach and NaN guards run every step in both spaces (from the step's reductions).
+  int check_every = 0;
   Real penetration_depth = 0.5;  // fluid deeper than this many dp inside a solid is a fault
 };
 

@@ -3,7 +3,11 @@
 // SPHDEM_REQUIRE_GPU=1, in which case a missing GPU is a failure.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <cstdlib>
+#include <limits>
 #include <map>
 #include <sstream>
 
@@ -38,22 +42,36 @@ TEST(GpuParity, DamBreakHostEqualsDevice) {
   auto host = make_solver(scene, Backend::kHost, log);
   auto dev = make_solver(scene, Backend::kDevice, log);
   ASSERT_STREQ(dev->space_name(), "device");
+  // FMA contraction on the GPU changes the last bits of each step. Tolerances are in units of the
+  // build's rounding (epsilon of Real): 1e-9 and 1e-6 dp in double, as before, and the same
+  // multiple of epsilon in float.
+  const double eps = double(std::numeric_limits<Real>::epsilon());
+  const double dt_tol = std::max(1e-9, 1e3 * eps);
+  const double pos_tol = std::max(1e-6, 1e3 * eps);
+  double worst_dt = 0;
   for (int s = 0; s < 200; ++s) {
     const StepStats a = host->step();
     const StepStats b = dev->step();
-    ASSERT_NEAR(a.dt, b.dt, 1e-9 * a.dt) << "step " << s;
+    worst_dt = std::max(worst_dt, std::abs(double(a.dt - b.dt)) / double(a.dt));
+    ASSERT_LE(std::abs(double(a.dt - b.dt)), dt_tol * double(a.dt)) << "step " << s;
   }
   const auto h = by_id(host->host_particles());
   const auto d = by_id(dev->host_particles());
   ASSERT_EQ(h.size(), d.size());
   const Real dp = scene.sph.dp;
+  double worst_pos = 0, worst_rho = 0;
   for (const auto& [id, hv] : h) {
     const auto it = d.find(id);
     ASSERT_NE(it, d.end()) << "id " << id;
-    // FMA contraction on the GPU changes the last bits; 200 steps keep that far below dp.
-    EXPECT_NEAR(norm(hv.first - it->second.first), 0, 1e-6 * dp) << "id " << id;
-    EXPECT_NEAR(hv.second, it->second.second, 1e-6 * hv.second) << "id " << id;
+    worst_pos = std::max(worst_pos, double(norm(hv.first - it->second.first)) / double(dp));
+    worst_rho = std::max(worst_rho, std::abs(double(hv.second - it->second.second)) / hv.second);
   }
+  std::printf(
+      "host vs device after 200 steps (%s): max |dt| rel %.3g, max |dx|/dp %.3g, "
+      "max |drho|/rho %.3g\n",
+      SPHDEM_PRECISION_NAME, worst_dt, worst_pos, worst_rho);
+  EXPECT_LE(worst_pos, pos_tol);
+  EXPECT_LE(worst_rho, pos_tol);
 }
 
 TEST(GpuParity, DeviceSortMatchesHostSort) {
