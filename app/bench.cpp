@@ -68,7 +68,10 @@ void run_bench(const BenchOptions& opt, std::ostream& os_rank) {
     os << std::setprecision(6) << "{\n  \"scene\": \"" << scene.name << "\",\n  \"backend\": \""
        << solver->space_name() << "\",\n  \"threads\": " << host_thread_count()
        << ",\n  \"ranks\": " << world_size() << ",\n  \"precision\": \"" << SPHDEM_PRECISION_NAME
-       << "\",\n  \"fluid_particles\": " << n
+       << "\",\n  \"boundary\": \""
+       << (scene.sph.boundary == BoundaryMethod::kMdbc ? "mdbc" : "dbc")
+       << "\",\n  \"h_over_dp\": " << scene.sph.h_factor * std::sqrt(double(scene.dim))
+       << ",\n  \"fluid_particles\": " << n
        << ",\n  \"boundary_particles\": " << rep.wall + rep.grain << ",\n  \"steps\": " << steps
        << ",\n  \"pairs_per_step\": " << pairs << ",\n  \"seconds_per_step\": " << wall / steps
        << ",\n  \"particle_steps_per_second\": " << n * steps / wall << ",\n  \"phases\": {";

@@ -2,7 +2,8 @@
 # The GPU checks in one pass, for a machine with a CUDA GPU: the gpu test label with
 # SPHDEM_REQUIRE_GPU=1, compute-sanitizer (memcheck, racecheck) on the GPU tests, the device
 # benchmark (jobs/bench_gpu.sh) and a 2-rank run sharing one GPU (the halo's host staging path).
-# Usage: OUT=dir jobs/gpu_check.sh     (binaries: build/ double, build-gpu-float/ float)
+# Usage: OUT=dir jobs/gpu_check.sh     (binaries: build/ double, build-gpu-float/ float; build the
+# latter with `make BUILD=build-gpu-float PRECISION=float`)
 # Writes OUT/log.txt, OUT/bench_gpu.jsonl, OUT/memcheck.txt, OUT/racecheck.txt.
 set -uo pipefail
 cd "$(dirname "$0")/.."
