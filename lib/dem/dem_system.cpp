@@ -190,9 +190,45 @@ const Vec3* DemSystem::find_spring(const ContactKey& k) const {
   return &hist_springs_[std::size_t(it - hist_keys_.begin())];
 }
 
+// A grain's bounding sphere does not change as it turns, so the pair list stays valid while no
+// grain has moved more than half the skin: two grains then close the gap by at most one skin.
+bool DemSystem::pairs_stale() const {
+  if (pairs_built_at_.size() != bodies_.size()) return true;
+  const Real lim2 = Real(0.25) * skin_ * skin_;
+  for (std::size_t i = 0; i < bodies_.size(); ++i)
+    if (!(norm2(bodies_[i].x - pairs_built_at_[i]) <= lim2)) return true;  // NaN: rebuild
+  return false;
+}
+
 void DemSystem::find_pairs() {
+  build_pair_list();
+  const std::size_t n = bodies_.size();
+  by_body_off_.assign(n + 1, 0);
+  for (const auto& [i, j] : pairs_) {
+    ++by_body_off_[i + 1];
+    ++by_body_off_[j + 1];
+  }
+  for (std::size_t i = 0; i < n; ++i) by_body_off_[i + 1] += by_body_off_[i];
+  by_body_.resize(2 * pairs_.size());
+  std::vector<std::uint32_t> fill(by_body_off_.begin(), by_body_off_.end() - 1);
+  for (std::size_t pi = 0; pi < pairs_.size(); ++pi) {
+    by_body_[fill[pairs_[pi].first]++] = std::uint32_t(2 * pi);
+    by_body_[fill[pairs_[pi].second]++] = std::uint32_t(2 * pi + 1);
+  }
+}
+
+void DemSystem::build_pair_list() {
   pairs_.clear();
+  ++pair_builds_;
+  pairs_built_at_.resize(bodies_.size());
+  for (std::size_t i = 0; i < bodies_.size(); ++i) pairs_built_at_[i] = bodies_[i].x;
   const Index n = Index(bodies_.size());
+  // The skin: a quarter of the smallest bounding radius (LAMMPS-style Verlet list; the grains'
+  // contact forces are unchanged, since a listed pair whose spheres do not touch adds nothing).
+  Real rmin = std::numeric_limits<Real>::max();
+  for (const RigidBody& b : bodies_)
+    rmin = std::min(rmin, templates_[std::size_t(b.shape)]->bounding_radius());
+  skin_ = n > 0 ? Real(0.25) * rmin : Real(0);
   if (n < 2) return;
   std::vector<Vec3> pos(static_cast<std::size_t>(n));
   std::vector<GlobalId> ids(static_cast<std::size_t>(n));
@@ -222,13 +258,13 @@ void DemSystem::find_pairs() {
         const RigidBody& a = bodies_[std::size_t(i)];
         const RigidBody& b = bodies_[std::size_t(j)];
         if (a.motion != Motion::kFree && b.motion != Motion::kFree) continue;
-        const Real reach = rad[std::size_t(i)] + rad[std::size_t(j)];
+        const Real reach = rad[std::size_t(i)] + rad[std::size_t(j)] + skin_;
         if (norm2(a.x - b.x) < reach * reach)
           pairs_.emplace_back(std::uint32_t(i), std::uint32_t(j));
       }
     return;
   }
-  Real cell = 2 * rmax;
+  Real cell = 2 * rmax + skin_;
   for (int d = 0; d < 3; ++d) {
     lo[d] -= cell;
     hi[d] += cell;
@@ -259,7 +295,7 @@ void DemSystem::find_pairs() {
       if (Index(bj) <= i) return;
       const RigidBody& b = bodies_[bj];
       if (a.motion != Motion::kFree && b.motion != Motion::kFree) return;
-      const Real reach = rad[std::size_t(i)] + rad[bj];
+      const Real reach = rad[std::size_t(i)] + rad[bj] + skin_;
       if (rr < reach * reach) out.push_back(bj);
       (void)rij;
     });
@@ -279,7 +315,7 @@ void DemSystem::compute_forces(Real dt) {
       eval_[i].v += Real(0.5) * dt * acc_prev_[i];
       eval_[i].w += Real(0.5) * dt * alpha_prev_[i];
     }
-  find_pairs();
+  if (pairs_stale()) find_pairs();
   // World positions of every grain's surface nodes, once per step (a pair would otherwise rotate
   // the same nodes again for every neighbour).
   node_begin_.assign(n + 1, 0);
@@ -316,22 +352,37 @@ void DemSystem::compute_forces(Real dt) {
     box_hi_[i] = hi + Vec3(pad, pad, pad);
   });
   const Index np = Index(pairs_.size());
-  std::vector<PairOut> pout(static_cast<std::size_t>(np));
+  // Per-step scratch kept between calls (its vectors keep their capacity): allocating one history
+  // vector per pair and per body every step cost more than the sphere contacts themselves.
+  // The lambdas below run on OpenMP worker threads, where the name of a thread_local would mean
+  // that worker's own (empty) instance: bind the calling thread's instances to references first.
+  static thread_local std::vector<PairOut> pout_tl;
+  static thread_local std::vector<std::vector<HistEntry>> whist_tl;
+  static thread_local std::vector<HistEntry> all_tl;
+  std::vector<PairOut>& pout = pout_tl;
+  std::vector<std::vector<HistEntry>>& whist = whist_tl;
+  std::vector<HistEntry>& all = all_tl;
+  pout.resize(static_cast<std::size_t>(np));
 
   // ---- pairs of grains (each pair writes only its own slot) ----
   run_each(np, [&](Index pi) {
     PairOut& out = pout[std::size_t(pi)];
+    out.a = Load{};
+    out.b = Load{};
+    out.max_d = 0;
+    out.hist.clear();
     const RigidBody& a = eval_[pairs_[std::size_t(pi)].first];
     const RigidBody& b = eval_[pairs_[std::size_t(pi)].second];
     const GrainTemplate& ta = *templates_[std::size_t(a.shape)];
     const GrainTemplate& tb = *templates_[std::size_t(b.shape)];
-    const PairLaw law = pair_law(a, b, false);
     if (ta.is_sphere() && tb.is_sphere()) {
-      // Fast path: one analytic contact point on the line of centres.
+      // Fast path: one analytic contact point on the line of centres. The law (masses, damping)
+      // is worked out only for pairs in contact: most listed pairs are not.
       const Vec3 ab = a.x - b.x;
       const Real dist = norm(ab);
       const Real d = ta.radius() + tb.radius() - dist;
       if (!(d > 0) || !(dist > 0)) return;
+      const PairLaw law = pair_law(a, b, false);
       const Vec3 nrm = ab / dist;
       const Vec3 xc = b.x + nrm * (tb.radius() - Real(0.5) * d);
       const Vec3 v_rel = point_velocity(a, xc) - point_velocity(b, xc);
@@ -351,6 +402,7 @@ void DemSystem::compute_forces(Real dt) {
       for (int d = 0; d < 3; ++d)
         if (box_lo_[ia][d] > box_hi_[ib][d] || box_lo_[ib][d] > box_hi_[ia][d]) return;
     }
+    const PairLaw law = pair_law(a, b, false);
     // Level-set master-slave test in both orders, each with weight 1/2.
     auto pass = [&](const RigidBody& m, const GrainTemplate& tm, std::size_t mi, const RigidBody& s,
                     const GrainTemplate& ts, Load& load_m, Load& load_s) {
@@ -392,24 +444,25 @@ void DemSystem::compute_forces(Real dt) {
   });
 
   // ---- per-body gather: walls, then the body's pairs in pair order ----
-  std::vector<std::vector<std::pair<std::uint32_t, bool>>> mine(n);
-  for (Index pi = 0; pi < np; ++pi) {
-    mine[pairs_[std::size_t(pi)].first].emplace_back(std::uint32_t(pi), true);
-    mine[pairs_[std::size_t(pi)].second].emplace_back(std::uint32_t(pi), false);
-  }
-  std::vector<std::vector<HistEntry>> whist(n);
+  whist.resize(n);
   std::vector<Real> wmax(n, Real(0));
   run_each(Index(n), [&](Index ii) {
     const std::size_t i = std::size_t(ii);
     const RigidBody& b = eval_[i];
     Load load;
+    whist[i].clear();
     if (b.motion == Motion::kFree) {
       const GrainTemplate& t = *templates_[std::size_t(b.shape)];
-      const PairLaw law = pair_law(b, b, true);
+      PairLaw law;
+      bool have_law = false;  // worked out at the first wall within reach
       for (std::size_t w = 0; w < walls_.size(); ++w) {
         const Wall& wall = walls_[w];
         const Real phc = wall_phi(wall, b.x);
         if (phc > t.bounding_radius()) continue;
+        if (!have_law) {
+          law = pair_law(b, b, true);
+          have_law = true;
+        }
         const GlobalId wkey = kWallKeyBit | GlobalId(w);
         if (t.is_sphere()) {
           const Real d = t.radius() - phc;
@@ -443,8 +496,9 @@ void DemSystem::compute_forces(Real dt) {
         }
       }
     }
-    for (const auto& [pi, is_a] : mine[i]) {
-      const Load& l = is_a ? pout[pi].a : pout[pi].b;
+    for (std::uint32_t e = by_body_off_[i]; e < by_body_off_[i + 1]; ++e) {
+      const std::uint32_t code = by_body_[e];
+      const Load& l = (code & 1u) == 0 ? pout[code >> 1].a : pout[code >> 1].b;
       load.f += l.f;
       load.t += l.t;
     }
@@ -453,7 +507,7 @@ void DemSystem::compute_forces(Real dt) {
   });
 
   // ---- new contact history, sorted by key ----
-  std::vector<HistEntry> all;
+  all.clear();
   max_overlap_ = 0;
   for (const PairOut& p : pout) {
     all.insert(all.end(), p.hist.begin(), p.hist.end());
@@ -514,6 +568,7 @@ void DemSystem::restore(const DemState& s) {
                      std::to_string(bodies_.size()) + " and " + std::to_string(walls_.size()));
   time_ = s.time;
   bodies_ = s.bodies;
+  pairs_built_at_.clear();  // the pair list is rebuilt from the restored positions
   acc_prev_ = s.acc_prev;
   alpha_prev_ = s.alpha_prev;
   for (std::size_t i = 0; i < walls_.size(); ++i) {

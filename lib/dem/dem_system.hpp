@@ -136,8 +136,11 @@ class DemSystem {
   const Vec3& torque(std::size_t body) const { return torque_[body]; }  // contacts only
   Real time() const { return time_; }
   std::size_t contact_count() const { return hist_keys_.size(); }  // active contact points
-  std::size_t pair_count() const { return pairs_.size(); }         // broad-phase pairs
-  Real max_overlap() const { return max_overlap_; }                // of the last compute_forces
+  // Broad-phase pairs: bounding spheres within reach plus the skin (a Verlet list, rebuilt when a
+  // grain has moved more than half the skin since the last build).
+  std::size_t pair_count() const { return pairs_.size(); }
+  std::size_t pair_builds() const { return pair_builds_; }
+  Real max_overlap() const { return max_overlap_; }  // of the last compute_forces
   const std::vector<ContactKey>& history_keys() const { return hist_keys_; }
   const std::vector<Vec3>& history_springs() const { return hist_springs_; }
   Real kinetic_energy() const;
@@ -150,6 +153,8 @@ class DemSystem {
  private:
   struct PairOut;
   void find_pairs();
+  void build_pair_list();
+  bool pairs_stale() const;
   PairLaw pair_law(const RigidBody& a, const RigidBody& b, bool wall) const;
   const Vec3* find_spring(const ContactKey& k) const;
 
@@ -162,6 +167,12 @@ class DemSystem {
   std::vector<Vec3> force_, torque_, ext_force_, ext_torque_;
   std::vector<Vec3> acc_prev_, alpha_prev_;  // last step's dv/dt (world) and dw/dt (body)
   std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs_;
+  std::vector<Vec3> pairs_built_at_;  // centroids at the last pair build
+  // Each body's pairs in pair order (CSR): entry 2 pi + 0 when the body is the pair's first,
+  // 2 pi + 1 when its second. Built with the pair list.
+  std::vector<std::uint32_t> by_body_off_, by_body_;
+  Real skin_ = 0;  // of the last build
+  std::size_t pair_builds_ = 0;
   std::vector<std::size_t> node_begin_;  // body i's nodes: world_nodes_[node_begin_[i] ...]
   std::vector<Vec3> world_nodes_;        // surface nodes in the world frame, this step
   std::vector<Vec3> box_lo_, box_hi_;    // world bounding box of each grain, this step

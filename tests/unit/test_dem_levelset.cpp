@@ -7,6 +7,12 @@
 #include <cmath>
 #include <cstdio>
 #include <random>
+#include <utility>
+#include <vector>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 
 #include "dem/dem_system.hpp"
 
@@ -141,6 +147,78 @@ TEST(DemLevelSet, HistoryIsKeyedByBodyIdNotSlot) {
     if (keys[k].master == sys.bodies()[0].id) {
       EXPECT_LT(norm(sys.history_springs()[k] - spring), 1e-15);
     }
+}
+
+}  // namespace
+}  // namespace sphdem::dem
+
+namespace sphdem::dem {
+namespace {
+
+// A jittered lattice of spheres and pyramids, overlapping their neighbours, on a floor: enough
+// bodies (>= 64) that the pair search and the force loops run on OpenMP threads.
+DemSystem packed_system() {
+  DemParams p = static_params(200);
+  p.gravity = Vec3(0, 0, -9.81);
+  DemSystem sys(p);
+  const int s = sys.add_template(GrainTemplate::sphere(0.005));
+  const int r = sys.add_template(GrainTemplate::trigonal_pyramid(0.01, 0.1, 3, 0.0008));
+  sys.add_plane_wall(Vec3(0, 0, 0), Vec3(0, 0, 1));
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<Real> j(-0.0002, 0.0002);
+  for (int x = 0; x < 6; ++x)
+    for (int y = 0; y < 6; ++y)
+      for (int z = 0; z < 4; ++z)
+        sys.add_body((x + y + z) % 5 == 0 ? r : s, 2500,
+                     Vec3(0.0098 * x + j(rng), 0.0098 * y + j(rng), 0.0049 + 0.0098 * z + j(rng)),
+                     random_quat(rng), Vec3(j(rng), j(rng), j(rng)));
+  return sys;
+}
+
+// The contact forces do not depend on the OpenMP thread count (deterministic gathers), and the
+// Verlet pair list (rebuilt only when a grain has moved half a skin) gives the same forces as a
+// list rebuilt every step: a restored state forces a rebuild, so the two systems below differ
+// only in when their lists were built.
+TEST(DemSystemThreads, ForcesIndependentOfThreadsAndOfPairListAge) {
+#ifdef _OPENMP
+  const int threads_before = omp_get_max_threads();
+#endif
+  auto run = [](int threads, bool rebuild_every_step) {
+#ifdef _OPENMP
+    omp_set_num_threads(threads);
+#else
+    (void)threads;
+#endif
+    DemSystem sys = packed_system();
+    for (int k = 0; k < 60; ++k) {
+      if (rebuild_every_step) sys.restore(sys.state());
+      sys.step(2e-5);
+    }
+    std::vector<Vec3> f;
+    for (std::size_t i = 0; i < sys.bodies().size(); ++i) {
+      f.push_back(sys.force(i));
+      f.push_back(sys.torque(i));
+      f.push_back(sys.bodies()[i].x);
+    }
+    return std::make_pair(f, sys.contact_count());
+  };
+  const auto one = run(1, false);
+  const auto two = run(2, false);
+  const auto fresh = run(2, true);
+#ifdef _OPENMP
+  omp_set_num_threads(threads_before);
+#endif
+  ASSERT_GT(one.second, 100u) << "the lattice should be in contact";
+  ASSERT_EQ(one.first.size(), two.first.size());
+  for (std::size_t i = 0; i < one.first.size(); ++i) {
+    EXPECT_EQ(one.first[i].x, two.first[i].x) << i;
+    EXPECT_EQ(one.first[i].y, two.first[i].y) << i;
+    EXPECT_EQ(one.first[i].z, two.first[i].z) << i;
+    EXPECT_EQ(one.first[i].x, fresh.first[i].x) << i;
+    EXPECT_EQ(one.first[i].z, fresh.first[i].z) << i;
+  }
+  EXPECT_EQ(one.second, two.second);
+  EXPECT_EQ(one.second, fresh.second);
 }
 
 }  // namespace

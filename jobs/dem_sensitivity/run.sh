@@ -1,0 +1,38 @@
+#!/usr/bin/env bash
+# LS-DEM resolution study (issue #5): the small rock collapse (mini_collapse.yaml) at the
+# default node and grid spacing with three pack seeds (the run-to-run spread), then with the node
+# spacing and the phi-grid spacing each made 1.5x coarser and 1.5x finer.
+# Usage: jobs/dem_sensitivity/run.sh OUTDIR [PARALLEL]   -> OUTDIR/summary.csv
+# One OpenMP thread per run; PARALLEL runs at a time (default 1).
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+out=${1:?output folder}
+par=${2:-1}
+bin=${SPHDEM:-build/sphdem}
+mkdir -p "$out"
+cases="default_s3:0.0018:0.0006:3 default_s4:0.0018:0.0006:4 default_s5:0.0018:0.0006:5
+nodes_coarse:0.0027:0.0006:3 nodes_fine:0.0012:0.0006:3
+grid_coarse:0.0018:0.0009:3 grid_fine:0.0018:0.0004:3"
+one() {
+  IFS=: read -r name ns gs seed <<<"$1"
+  OMP_NUM_THREADS=1 "$bin" run jobs/dem_sensitivity/mini_collapse.yaml --out "$out/$name" --quiet \
+    --set "dem.shapes[0].node_spacing=$ns" --set "dem.shapes[0].grid_spacing=$gs" \
+    --set "dem.packs[0].seed=$seed" > /dev/null 2>&1 || true
+}
+export -f one; export out bin
+printf '%s\n' $cases | xargs -P "$par" -I{} bash -c 'one {}'
+echo "case,node_spacing_m,grid_spacing_m,seed,nodes_mean,repose_deg,runout_m,height_m,ke_final_J,status,wall_s" > "$out/summary.csv"
+for c in $cases; do
+  IFS=: read -r name ns gs seed <<<"$c"
+  d="$out/$name"
+  nodes=$(grep -o '[0-9]* nodes (spacing' "$d/run.log" | awk '{s+=$1; n++} END {if (n) printf "%.1f", s/n}')
+  heap=$(grep '^heap:' "$d/run.log" | tail -1)
+  ang=$(sed -n 's/.*repose angle \([-0-9.e]*\) deg.*/\1/p' <<<"$heap")
+  ro=$(sed -n 's/.*run-out from x = [-0-9.e]*: \([-0-9.e]*\) m.*/\1/p' <<<"$heap")
+  ht=$(sed -n 's/.*height \([-0-9.e]*\) m.*/\1/p' <<<"$heap")
+  ke=$(tail -1 "$d/grains.csv" | cut -d, -f2)
+  st=$(sed -n 's/.*"status": "\([a-z]*\)".*/\1/p' "$d/summary.json")
+  wall=$(sed -n 's/.*"wall_seconds": \([0-9.e]*\).*/\1/p' "$d/summary.json")
+  echo "$name,$ns,$gs,$seed,$nodes,$ang,$ro,$ht,$ke,$st,$wall" >> "$out/summary.csv"
+done
+cat "$out/summary.csv"
