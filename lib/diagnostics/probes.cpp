@@ -62,15 +62,27 @@ Real probe_surface_height(const ParticleSet<Host>& ps, const StepParams& p, Real
     bottom = std::min(bottom, dot(d, up));
   }
   if (near.empty()) return std::numeric_limits<Real>::quiet_NaN();
-  const Real step = p.dp / 8;
-  for (Real s = top + reach; s >= bottom - reach; s -= step) {
+  // The surface is where the Shepard sum of the particle volumes falls to one half: scan down in
+  // steps of dp/8 to the first sample at or above one half, then bisect between it and the sample
+  // above (returning the sample itself left a bias of up to dp/8, always downwards).
+  auto shepard = [&](Real s) {
     const Vec3 q = base + up * s;
     Real sum = 0;
     for (Index j : near) {
       const Real r2 = norm2(q - ps.pos[j]);
       if (r2 < p.radius2) sum += kernel_w(p.kernel, std::sqrt(r2)) * ps.mass[j] / ps.rho[j];
     }
-    if (sum >= Real(0.5)) return s;
+    return sum;
+  };
+  const Real step = p.dp / 8;
+  for (Real s = top + reach; s >= bottom - reach; s -= step) {
+    if (shepard(s) < Real(0.5)) continue;
+    Real lo = s, hi = s + step;  // shepard(lo) >= 1/2 > shepard(hi)
+    for (int it = 0; it < 30 && hi - lo > p.dp * Real(1e-6); ++it) {
+      const Real mid = Real(0.5) * (lo + hi);
+      (shepard(mid) >= Real(0.5) ? lo : hi) = mid;
+    }
+    return Real(0.5) * (lo + hi);
   }
   return std::numeric_limits<Real>::quiet_NaN();
 }

@@ -161,5 +161,39 @@ barrier: {preset: P00, x: 0.3, y: [0, 0.2]}
   EXPECT_EQ(t.fluid_downstream, 0);
 }
 
+// The surface gauge on a still lattice filled to z = H (particle centres at (k + 1/2) dp) reads H
+// to well under a tenth of dp, wherever the surface falls against the gauge's dp/8 scan
+// (before the bisection it returned the scan sample below the crossing: up to dp/8 low).
+TEST(Probes, SurfaceHeightOfAFilledLatticeIsItsFillLevel) {
+  for (const double h_factor : {1.0, 1.2}) {
+    const Scene scene = parse_scene(
+        "name: tank\ndimension: 3\ndomain: {lo: [0, 0, 0], hi: [0.24, "
+        "0.24, 0.3]}\nsph: {dp: 0.01, h_factor: " +
+            std::to_string(h_factor) + "}\ntime: {end: 0.1}\n",
+        "tank.yaml");
+    const StepParams p = make_step_params(scene, 10);
+    const Real dp = 0.01;
+    for (const double shift : {0.0, 0.3, 0.55, 0.8}) {  // lattice raised by a fraction of dp
+      ParticleSet<Host> ps;
+      std::vector<Vec3> pos;
+      for (int i = 0; i < 12; ++i)
+        for (int j = 0; j < 12; ++j)
+          for (int k = 0; k < 12; ++k)
+            pos.emplace_back((i + 0.5) * dp, (j + 0.5) * dp, (k + 0.5 + shift) * dp);
+      ps.n_fluid = Index(pos.size());
+      ps.resize(ps.size());
+      for (Index i = 0; i < ps.n_fluid; ++i) {
+        ps.pos[i] = pos[std::size_t(i)];
+        ps.mass[i] = 1000 * dp * dp * dp;
+        ps.rho[i] = 1000;
+        ps.body[i] = -1;
+      }
+      const double fill = (12 + shift) * dp;
+      const Real z = probe_surface_height(ps, p, 0.06, 0.06);
+      EXPECT_NEAR(z, fill, 0.05 * dp) << "h_factor " << h_factor << ", shift " << shift;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace sphdem
