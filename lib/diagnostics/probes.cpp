@@ -33,8 +33,8 @@ ChannelFlow probe_channel_flow(const ParticleSet<Host>& ps, const StepParams& p,
   Real sum = 0;
   int n = 0;
   for (Index j = 0; j < ps.n_fluid; ++j) {
-    const Real dx = ps.pos[j].x - x, dy = ps.pos[j].y - y;
-    if (dx * dx + dy * dy < p.h * p.h) {
+    const Vec3 d = p.grid.separation(ps.pos[j], Vec3(x, y, ps.pos[j].z));  // periodic images
+    if (d.x * d.x + d.y * d.y < p.h * p.h) {
       sum += ps.vel[j].x;
       ++n;
     }
@@ -52,8 +52,10 @@ Real probe_surface_height(const ParticleSet<Host>& ps, const StepParams& p, Real
   std::vector<Index> near;
   Real top = -std::numeric_limits<Real>::infinity(), bottom = -top;
   const Real reach = Real(2) * p.h;
+  // Separations through the periodic images: a gauge within 2h of a periodic side sees the fluid
+  // across it (it read low there before: the Shepard sum missed those neighbours).
   for (Index j = 0; j < ps.n_fluid; ++j) {
-    const Vec3 d = ps.pos[j] - base;
+    const Vec3 d = p.grid.separation(ps.pos[j], base);
     const Vec3 lateral = d - up * dot(d, up);
     if (p.dim == 2 && std::abs(lateral.x) >= reach) continue;
     if (p.dim == 3 && norm(lateral) >= reach) continue;
@@ -69,7 +71,7 @@ Real probe_surface_height(const ParticleSet<Host>& ps, const StepParams& p, Real
     const Vec3 q = base + up * s;
     Real sum = 0;
     for (Index j : near) {
-      const Real r2 = norm2(q - ps.pos[j]);
+      const Real r2 = norm2(p.grid.separation(q, ps.pos[j]));
       if (r2 < p.radius2) sum += kernel_w(p.kernel, std::sqrt(r2)) * ps.mass[j] / ps.rho[j];
     }
     return sum;

@@ -163,12 +163,14 @@ barrier: {preset: P00, x: 0.3, y: [0, 0.2]}
 
 // The surface gauge on a still lattice filled to z = H (particle centres at (k + 1/2) dp) reads H
 // to well under a tenth of dp, wherever the surface falls against the gauge's dp/8 scan
-// (before the bisection it returned the scan sample below the crossing: up to dp/8 low).
+// (before the bisection it returned the scan sample below the crossing: up to dp/8 low), and next
+// to a periodic side as well as in the middle (it ignored the periodic images before).
 TEST(Probes, SurfaceHeightOfAFilledLatticeIsItsFillLevel) {
   for (const double h_factor : {1.0, 1.2}) {
     const Scene scene = parse_scene(
-        "name: tank\ndimension: 3\ndomain: {lo: [0, 0, 0], hi: [0.24, "
-        "0.24, 0.3]}\nsph: {dp: 0.01, h_factor: " +
+        // Periodic in x and y with a 0.12 m period: the gauge at (0.01, 0.02) needs the images.
+        "name: tank\ndimension: 3\ndomain: {lo: [0, 0, 0], hi: [0.12, 0.12, 0.3], periodic: "
+        "[true, true, false]}\nsph: {dp: 0.01, h_factor: " +
             std::to_string(h_factor) + "}\ntime: {end: 0.1}\n",
         "tank.yaml");
     const StepParams p = make_step_params(scene, 10);
@@ -189,8 +191,11 @@ TEST(Probes, SurfaceHeightOfAFilledLatticeIsItsFillLevel) {
         ps.body[i] = -1;
       }
       const double fill = (12 + shift) * dp;
-      const Real z = probe_surface_height(ps, p, 0.06, 0.06);
-      EXPECT_NEAR(z, fill, 0.05 * dp) << "h_factor " << h_factor << ", shift " << shift;
+      for (const Vec3 at : {Vec3(0.06, 0.06, 0), Vec3(0.01, 0.02, 0)}) {
+        const Real z = probe_surface_height(ps, p, at.x, at.y);
+        EXPECT_NEAR(z, fill, 0.05 * dp)
+            << "h_factor " << h_factor << ", shift " << shift << ", gauge at " << at.x;
+      }
     }
   }
 }
