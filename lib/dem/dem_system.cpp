@@ -200,8 +200,66 @@ bool DemSystem::pairs_stale() const {
   return false;
 }
 
+std::size_t DemSystem::contact_count() const {
+  std::size_t n = hist_keys_.size();
+  for (std::uint8_t t : pair_touch_) n += t;
+  return n;
+}
+
+void DemSystem::merged_history(std::vector<ContactKey>& keys, std::vector<Vec3>& springs) const {
+  std::vector<HistEntry> all;
+  all.reserve(hist_keys_.size());
+  for (std::size_t k = 0; k < hist_keys_.size(); ++k)
+    all.push_back({hist_keys_[k], hist_springs_[k]});
+  const std::size_t n_hist = all.size();
+  for (std::size_t pi = 0; pi < pair_touch_.size(); ++pi)
+    if (pair_touch_[pi])
+      all.push_back(
+          {ContactKey{bodies_[pairs_[pi].first].id, bodies_[pairs_[pi].second].id, kCentreNode},
+           pair_spring_[pi]});
+  const auto by_key = [](const HistEntry& x, const HistEntry& y) { return x.key < y.key; };
+  std::sort(all.begin() + std::ptrdiff_t(n_hist), all.end(), by_key);
+  std::inplace_merge(all.begin(), all.begin() + std::ptrdiff_t(n_hist), all.end(), by_key);
+  keys.resize(all.size());
+  springs.resize(all.size());
+  for (std::size_t k = 0; k < all.size(); ++k) {
+    keys[k] = all[k].key;
+    springs[k] = all[k].spring;
+  }
+}
+
+std::vector<ContactKey> DemSystem::history_keys() const {
+  std::vector<ContactKey> k;
+  std::vector<Vec3> s;
+  merged_history(k, s);
+  return k;
+}
+
+std::vector<Vec3> DemSystem::history_springs() const {
+  std::vector<ContactKey> k;
+  std::vector<Vec3> s;
+  merged_history(k, s);
+  return s;
+}
+
 void DemSystem::find_pairs() {
+  // The sphere pairs' springs leave the old list for the history, and come back into the new
+  // list by key (the rest of the history is found by key every step).
+  merged_history(hist_keys_, hist_springs_);
   build_pair_list();
+  pair_spring_.assign(pairs_.size(), Vec3());
+  pair_touch_.assign(pairs_.size(), 0);
+  for (std::size_t pi = 0; pi < pairs_.size(); ++pi) {
+    const RigidBody& a = bodies_[pairs_[pi].first];
+    const RigidBody& b = bodies_[pairs_[pi].second];
+    if (!templates_[std::size_t(a.shape)]->is_sphere() ||
+        !templates_[std::size_t(b.shape)]->is_sphere())
+      continue;
+    if (const Vec3* old = find_spring(ContactKey{a.id, b.id, kCentreNode})) {
+      pair_spring_[pi] = *old;
+      pair_touch_[pi] = 1;
+    }
+  }
   const std::size_t n = bodies_.size();
   by_body_off_.assign(n + 1, 0);
   for (const auto& [i, j] : pairs_) {
@@ -309,12 +367,15 @@ void DemSystem::compute_forces(Real dt) {
   const std::size_t n = bodies_.size();
   // Velocities predicted to the force time: the leapfrog carries v at half steps, so the dashpots
   // see v + a_prev dt/2 (second order for the damping; see DemSystem::step).
-  eval_ = bodies_;
-  for (std::size_t i = 0; i < n; ++i)
+  eval_.resize(n);
+  run_each(Index(n), [&](Index ii) {
+    const std::size_t i = std::size_t(ii);
+    eval_[i] = bodies_[i];
     if (eval_[i].motion == Motion::kFree) {
       eval_[i].v += Real(0.5) * dt * acc_prev_[i];
       eval_[i].w += Real(0.5) * dt * alpha_prev_[i];
     }
+  });
   if (pairs_stale()) find_pairs();
   // World positions of every grain's surface nodes, once per step (a pair would otherwise rotate
   // the same nodes again for every neighbour).
@@ -381,19 +442,21 @@ void DemSystem::compute_forces(Real dt) {
       const Vec3 ab = a.x - b.x;
       const Real dist = norm(ab);
       const Real d = ta.radius() + tb.radius() - dist;
-      if (!(d > 0) || !(dist > 0)) return;
+      if (!(d > 0) || !(dist > 0)) {
+        pair_touch_[std::size_t(pi)] = 0;
+        return;
+      }
       const PairLaw law = pair_law(a, b, false);
       const Vec3 nrm = ab / dist;
       const Vec3 xc = b.x + nrm * (tb.radius() - Real(0.5) * d);
       const Vec3 v_rel = point_velocity(a, xc) - point_velocity(b, xc);
-      const ContactKey key{a.id, b.id, kCentreNode};
-      const Vec3* old = find_spring(key);
-      Vec3 s = old ? *old : Vec3();
+      Vec3& s = pair_spring_[std::size_t(pi)];
+      if (!pair_touch_[std::size_t(pi)]) s = Vec3();
       const Vec3 f = contact_force(law, d, nrm, v_rel, dt, s, nullptr);
+      pair_touch_[std::size_t(pi)] = 1;
       out.a.add(f, xc, a.x);
       out.b.add(-f, xc, b.x);
       out.max_d = d;
-      out.hist.push_back({key, s});
       return;
     }
     // Bounding boxes of the surfaces apart: no node of one can be inside the other.
@@ -555,8 +618,7 @@ DemState DemSystem::state() const {
     s.wall_point.push_back(w.point);
     s.wall_offset.push_back(w.offset);
   }
-  s.keys = hist_keys_;
-  s.springs = hist_springs_;
+  merged_history(s.keys, s.springs);
   return s;
 }
 
@@ -569,6 +631,9 @@ void DemSystem::restore(const DemState& s) {
   time_ = s.time;
   bodies_ = s.bodies;
   pairs_built_at_.clear();  // the pair list is rebuilt from the restored positions
+  pairs_.clear();           // and its springs come from the restored history
+  pair_spring_.clear();
+  pair_touch_.clear();
   acc_prev_ = s.acc_prev;
   alpha_prev_ = s.alpha_prev;
   for (std::size_t i = 0; i < walls_.size(); ++i) {

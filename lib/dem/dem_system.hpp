@@ -135,14 +135,15 @@ class DemSystem {
   const Vec3& force(std::size_t body) const { return force_[body]; }    // contacts only
   const Vec3& torque(std::size_t body) const { return torque_[body]; }  // contacts only
   Real time() const { return time_; }
-  std::size_t contact_count() const { return hist_keys_.size(); }  // active contact points
+  std::size_t contact_count() const;  // active contact points
   // Broad-phase pairs: bounding spheres within reach plus the skin (a Verlet list, rebuilt when a
   // grain has moved more than half the skin since the last build).
   std::size_t pair_count() const { return pairs_.size(); }
   std::size_t pair_builds() const { return pair_builds_; }
   Real max_overlap() const { return max_overlap_; }  // of the last compute_forces
-  const std::vector<ContactKey>& history_keys() const { return hist_keys_; }
-  const std::vector<Vec3>& history_springs() const { return hist_springs_; }
+  // The contact history (tangential springs) sorted by key, sphere pairs included.
+  std::vector<ContactKey> history_keys() const;
+  std::vector<Vec3> history_springs() const;
   Real kinetic_energy() const;
 
   DemState state() const;
@@ -157,6 +158,8 @@ class DemSystem {
   bool pairs_stale() const;
   PairLaw pair_law(const RigidBody& a, const RigidBody& b, bool wall) const;
   const Vec3* find_spring(const ContactKey& k) const;
+  // hist_keys_ and the sphere pairs' springs merged, sorted by key.
+  void merged_history(std::vector<ContactKey>& keys, std::vector<Vec3>& springs) const;
 
   DemParams params_;
   Real alpha_gg_ = 0, alpha_gw_ = 0;  // Hertz damping constants
@@ -176,7 +179,14 @@ class DemSystem {
   std::vector<std::size_t> node_begin_;  // body i's nodes: world_nodes_[node_begin_[i] ...]
   std::vector<Vec3> world_nodes_;        // surface nodes in the world frame, this step
   std::vector<Vec3> box_lo_, box_hi_;    // world bounding box of each grain, this step
-  std::vector<ContactKey> hist_keys_;    // sorted
+  // Contact history. Sphere-sphere pairs keep their spring in the pair list while it lives
+  // (pair_spring_[pi], valid where pair_touch_[pi] is 1: in contact at the last step), so the
+  // common case needs no search; a rebuild carries them to the new list by key. Every other
+  // contact point (grain nodes, walls) is in hist_keys_/hist_springs_, sorted by key, rebuilt
+  // each step. After a restore, hist_keys_ holds everything until the next pair build.
+  std::vector<Vec3> pair_spring_;
+  std::vector<std::uint8_t> pair_touch_;
+  std::vector<ContactKey> hist_keys_;  // sorted
   std::vector<Vec3> hist_springs_;
   Real time_ = 0, max_overlap_ = 0;
   GlobalId next_id_ = 0;
