@@ -163,6 +163,7 @@ class DemSystem {
 
   DemParams params_;
   Real alpha_gg_ = 0, alpha_gw_ = 0;  // Hertz damping constants
+  Real zeta_gg_ = 0, zeta_gw_ = 0;    // linear dashpots' damping ratios
   std::vector<std::shared_ptr<const GrainTemplate>> templates_;
   std::vector<RigidBody> bodies_;
   std::vector<Wall> walls_;
