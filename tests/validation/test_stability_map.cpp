@@ -5,7 +5,10 @@
 //    Euler steps; the same point with the symplectic integrator, or with an Euler step every 5
 //    steps, runs (the controls).
 //  - CFL 0.5 without density diffusion: stable to t = 0.6 s (with the Mach guard at 0.25).
-// The DEM overlap guard point of the map needs DEM in the time loop (not yet).
+// And three points of the DEM map (jobs/stability_map.py --dem, docs/figures/dem_stability_map.png)
+// on inputs/sphere_pile.yaml: at kn 2e4 N/m a step of t_c/5 completes and t_c/2.5 stops on the
+// overlap guard; at kn 20 N/m the beads sink into each other at any step and the same guard says
+// the contacts are too soft.
 #include <gtest/gtest.h>
 
 #include <string>
@@ -66,6 +69,36 @@ TEST(StabilityMap, NoDiffusionAtCfl05IsStable) {
   ASSERT_TRUE(m.unstable);
   EXPECT_NE(m.failure.find("Mach number too high"), std::string::npos) << m.failure;
   EXPECT_GT(m.sim_time, 0.25);  // at the far wall, not at the start
+}
+
+RunResult run_pile(const std::string& out, const std::string& kn, const std::string& dt_factor) {
+  const Scene scene = load_scene(std::string(SPHDEM_SOURCE_DIR) + "/inputs/sphere_pile.yaml",
+                                 {"dem.grain_grain.kn=" + kn, "dem.grain_wall.kn=" + kn,
+                                  "dem.dt_factor=" + dt_factor, "time.end=0.2"});
+  RunOptions opt;
+  opt.out_dir = out;
+  opt.backend = Backend::kHost;
+  opt.quiet = true;
+  opt.handle_signals = false;
+  return run_scene(scene, opt);
+}
+
+TEST(StabilityMap, DemStepOfTcOver5RunsAndTcOver2p5TripsOverlapGuard) {
+  const RunResult ok = run_pile("map_dem_f10", "2e4", "10");
+  EXPECT_FALSE(ok.unstable) << ok.failure;
+  EXPECT_NEAR(ok.sim_time, 0.2, 1e-3);
+  const RunResult bad = run_pile("map_dem_f20", "2e4", "20");
+  ASSERT_TRUE(bad.unstable) << "expected the DEM overlap guard; the run completed";
+  EXPECT_NE(bad.failure.find("DEM overlap"), std::string::npos) << bad.failure;
+  EXPECT_NE(bad.failure.find("dem.dt_factor"), std::string::npos) << bad.failure;
+  EXPECT_FALSE(bad.last_checkpoint.empty()) << "an unstable run writes an emergency checkpoint";
+}
+
+TEST(StabilityMap, DemSoftContactsTripOverlapGuardAtAnyStep) {
+  const RunResult r = run_pile("map_dem_soft", "20", "0.5");
+  ASSERT_TRUE(r.unstable) << "expected the DEM overlap guard; the run completed";
+  EXPECT_NE(r.failure.find("too soft"), std::string::npos) << r.failure;
+  EXPECT_LT(r.sim_time, 0.05);
 }
 
 }  // namespace
