@@ -66,7 +66,8 @@ void select_device(int index) {
 // cudaFree every step, which measured 3-4 ms of a 1 M particle step on an H200. A freed block is
 // kept and handed out again for a request of the same size class (up to 2x larger). When
 // cudaMalloc fails, the cached blocks are released and the allocation is retried once.
-// SPHDEM_DEVICE_POOL=0 turns the pool off (compute-sanitizer then sees every free).
+// SPHDEM_DEVICE_POOL=0 turns the pool off (compute-sanitizer then sees every free); any value but 0
+// or 1 is refused.
 namespace {
 struct Pool {
   std::mutex m;
@@ -75,7 +76,12 @@ struct Pool {
   bool enabled = true;
   Pool() {
     const char* e = std::getenv("SPHDEM_DEVICE_POOL");
-    enabled = !(e && std::string(e) == "0");
+    if (!e) return;
+    const std::string v(e);
+    if (v != "0" && v != "1")
+      throw InputError("environment: SPHDEM_DEVICE_POOL=" + v +
+                       ": expected 0 (device memory pool off) or 1 (on, the default)");
+    enabled = v == "1";
   }
   void release_locked() {
     for (auto& [sz, p] : free_blocks) {

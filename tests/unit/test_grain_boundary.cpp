@@ -38,7 +38,7 @@ TEST(GrainBoundary, LatticeInsideTheSurfaceWithMirroredGhosts) {
     // Where two faces are equally near (edges, corners, the cube's diagonals) the gradient of phi
     // points between them and the mirror image falls short: it is only further out than the point.
     const Vec3 a(std::abs(s.pos[k].x), std::abs(s.pos[k].y), std::abs(s.pos[k].z));
-    Real d[3] = {0.04 - a.x, 0.04 - a.y, 0.04 - a.z};
+    Real d[3] = {Real(0.04) - a.x, Real(0.04) - a.y, Real(0.04) - a.z};
     std::sort(d, d + 3);  // d[0]: the nearest face, d[1]: the second nearest
     const Real d1 = d[0], d2 = d[1];
     const Real ghost_phi = geom::grid_phi(g, s.ghost[k]);

@@ -72,17 +72,17 @@ TEST(GrainPacks, RandomPlacementFillsTheBoxWithoutOverlap) {
     EXPECT_GE(c.z - r, -1e-12);
     EXPECT_LE(c.z + r, 0.04327 + 1e-12);
     for (std::size_t j = 0; j < i; ++j) EXPECT_GT(norm(c - bodies[j].x), 2 * r);
-    xmin = std::min(xmin, c.x);
-    xmax = std::max(xmax, c.x);
-    ymin = std::min(ymin, c.y);
-    ymax = std::max(ymax, c.y);
+    xmin = std::min(xmin, double(c.x));
+    xmax = std::max(xmax, double(c.x));
+    ymin = std::min(ymin, double(c.y));
+    ymax = std::max(ymax, double(c.y));
   }
   // Spread through the box, not stacked from one corner as the shelf packing does.
   EXPECT_GT(xmax - xmin, 0.12);
   EXPECT_GT(ymax - ymin, 0.25);
   const DemBuild shelf = build(std::string("{shape: bead, count: 60, seed: 4, ") + kBox + "}");
   double shelf_ymax = -1;
-  for (const auto& g : shelf.system->bodies()) shelf_ymax = std::max(shelf_ymax, g.x.y);
+  for (const auto& g : shelf.system->bodies()) shelf_ymax = std::max(shelf_ymax, double(g.x.y));
   EXPECT_LT(shelf_ymax, 0.1);
   // The same seed places the same grains.
   const DemBuild again =

@@ -148,7 +148,7 @@ TEST(DemChungOoi, Tests1And2ElasticHertzImpacts) {
       digitised_peak[r[0]] = std::max(digitised_peak[r[0]], std::stod(r[2]) * 1e3);
   for (const auto& r : rows) {
     const bool wall = r[0].find("wall") != std::string::npos;
-    const Material mat{std::stod(r[2]), std::stod(r[3]), std::stod(r[4])};
+    const Material mat{Real(std::stod(r[2])), Real(std::stod(r[3])), Real(std::stod(r[4]))};
     const Real radius = std::stod(r[5]), v = std::stod(r[7]);
     const Impact im = wall ? collide(mat, radius, true, Vec3(0, 0, -v), {}, {}, {}, 1, 0, 1000)
                            : collide(mat, radius, false, Vec3(v / 2, 0, 0), {}, Vec3(-v / 2, 0, 0),
