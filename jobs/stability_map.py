@@ -182,50 +182,48 @@ def main():
     if args.dem:
         return dem_main(args, table)
     fields = ["cfl", "delta", "res", "result", "t_end", "steps", "wall", "failure"]
-    rows = []
-    if os.path.exists(table):
-        with open(table) as f:
-            rows = list(csv.DictReader(f))
+    rows = read_table(table)
     if args.plot:
         plot(rows, args.plot)
         return 0
     done = {(float(r["cfl"]), float(r["delta"]), int(r["res"])) for r in rows}
     todo = [c for c in itertools.product(CFLS, DELTAS, RES) if c not in done]
+    sweep(args, table, fields, rows, todo, run_one,
+          lambda r: f"cfl {r['cfl']} delta {r['delta']} L/{r['res']}")
+    return 0
+
+
+def read_table(table):
+    if not os.path.exists(table):
+        return []
+    with open(table) as f:
+        return list(csv.DictReader(f))
+
+
+def sweep(args, table, fields, rows, todo, run, name):
+    """Runs run(args, *case) for each case, two at a time by default; after each, prints a line
+    and rewrites the table with every row so far (an interrupted sweep resumes where it stopped)."""
     with ThreadPoolExecutor(args.jobs) as pool:
-        for r in pool.map(lambda c: run_one(args, *c), todo):
+        for r in pool.map(lambda c: run(args, *c), todo):
             rows.append(r)
-            print(f"cfl {r['cfl']} delta {r['delta']} L/{r['res']}: {r['result']} at t = "
-                  f"{float(r['t_end']):.3f} s ({r['steps']} steps, {float(r['wall']):.0f} s)",
-                  flush=True)
+            print(f"{name(r)}: {r['result']} at t = {float(r['t_end']):.3f} s ({r['steps']} "
+                  f"steps, {float(r['wall']):.0f} s)", flush=True)
             with open(table, "w", newline="") as f:
                 w = csv.DictWriter(f, fieldnames=fields)
                 w.writeheader()
                 for row in rows:
                     w.writerow({k: row[k] for k in fields})
-    return 0
 
 
 def dem_main(args, table):
-    rows = []
-    if os.path.exists(table):
-        with open(table) as f:
-            rows = list(csv.DictReader(f))
+    rows = read_table(table)
     if args.plot:
         plot_dem(rows, args.plot)
         return 0
     done = {(float(r["kn"]), float(r["dt_factor"])) for r in rows}
     todo = [c for c in itertools.product(KNS, DT_FACTORS) if c not in done]
-    with ThreadPoolExecutor(args.jobs) as pool:
-        for r in pool.map(lambda c: run_dem(args, *c), todo):
-            rows.append(r)
-            print(f"kn {r['kn']:g} dt_factor {r['dt_factor']:g}: {r['result']} at t = "
-                  f"{float(r['t_end']):.3f} s ({r['steps']} steps, {float(r['wall']):.0f} s)",
-                  flush=True)
-            with open(table, "w", newline="") as f:
-                w = csv.DictWriter(f, fieldnames=DEM_FIELDS)
-                w.writeheader()
-                for row in rows:
-                    w.writerow({k: row[k] for k in DEM_FIELDS})
+    sweep(args, table, DEM_FIELDS, rows, todo, run_dem,
+          lambda r: f"kn {float(r['kn']):g} dt_factor {float(r['dt_factor']):g}")
     return 0
 
 

@@ -20,18 +20,24 @@
 namespace sphdem {
 namespace {
 
-RunResult run_point(const std::string& out, std::vector<std::string> extra) {
-  std::vector<std::string> ov = {"sph.dp=0.0073", "guards.rho_min_ratio=0.7",
-                                 "guards.rho_max_ratio=1.3", "guards.mach_max=0.2",
-                                 "guards.check_every=1"};
-  ov.insert(ov.end(), extra.begin(), extra.end());
-  const Scene scene = load_scene(std::string(SPHDEM_SOURCE_DIR) + "/inputs/dam_break_2d.yaml", ov);
+// Runs inputs/<file> with the overrides on the host into `out`.
+RunResult run_input(const std::string& file, const std::vector<std::string>& overrides,
+                    const std::string& out) {
+  const Scene scene = load_scene(std::string(SPHDEM_SOURCE_DIR) + "/inputs/" + file, overrides);
   RunOptions opt;
   opt.out_dir = out;
   opt.backend = Backend::kHost;
   opt.quiet = true;
   opt.handle_signals = false;
   return run_scene(scene, opt);
+}
+
+RunResult run_point(const std::string& out, std::vector<std::string> extra) {
+  std::vector<std::string> ov = {"sph.dp=0.0073", "guards.rho_min_ratio=0.7",
+                                 "guards.rho_max_ratio=1.3", "guards.mach_max=0.2",
+                                 "guards.check_every=1"};
+  ov.insert(ov.end(), extra.begin(), extra.end());
+  return run_input("dam_break_2d.yaml", ov, out);
 }
 
 TEST(StabilityMap, VerletWithDiffusionAtCfl03TripsDensityGuard) {
@@ -72,15 +78,10 @@ TEST(StabilityMap, NoDiffusionAtCfl05IsStable) {
 }
 
 RunResult run_pile(const std::string& out, const std::string& kn, const std::string& dt_factor) {
-  const Scene scene = load_scene(std::string(SPHDEM_SOURCE_DIR) + "/inputs/sphere_pile.yaml",
-                                 {"dem.grain_grain.kn=" + kn, "dem.grain_wall.kn=" + kn,
-                                  "dem.dt_factor=" + dt_factor, "time.end=0.2"});
-  RunOptions opt;
-  opt.out_dir = out;
-  opt.backend = Backend::kHost;
-  opt.quiet = true;
-  opt.handle_signals = false;
-  return run_scene(scene, opt);
+  return run_input("sphere_pile.yaml",
+                   {"dem.grain_grain.kn=" + kn, "dem.grain_wall.kn=" + kn,
+                    "dem.dt_factor=" + dt_factor, "time.end=0.2"},
+                   out);
 }
 
 TEST(StabilityMap, DemStepOfTcOver5RunsAndTcOver2p5TripsOverlapGuard) {
