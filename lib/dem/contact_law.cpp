@@ -11,10 +11,13 @@
 namespace sphdem::dem {
 
 Real hertz_restitution(Real alpha) {
-  // State (x, v); the force is -alpha x^{1/4} v - x^{3/2}, with x clamped at 0 in the powers.
+  // State (x, v); the force is -max(0, alpha x^{1/4} v + x^{3/2}) (no attraction, as
+  // hertz_normal_force), with x clamped at 0 in the powers. Once the rebounding dashpot cancels
+  // the spring the force stays zero and v is the exit speed.
   auto acc = [alpha](double x, double v) {
     const double xp = x > 0 ? x : 0.0;
-    return -double(alpha) * std::sqrt(std::sqrt(xp)) * v - xp * std::sqrt(xp);
+    const double push = double(alpha) * std::sqrt(std::sqrt(xp)) * v + xp * std::sqrt(xp);
+    return push > 0 ? -push : 0.0;
   };
   const double h = 2e-4;  // the undamped contact lasts t = 3.218 in these units
   double x = 0, v = 1;

@@ -150,6 +150,12 @@ TEST(DemContactLaw, TangentialSpringSticksThenSlidesAtTheCap) {
   tangential_force(s2, n2, Vec3(0, 0, 0), dt, kt, 0, mu, fn);
   EXPECT_NEAR(dot(s2, n2), 0, 1e-15);
   EXPECT_NEAR(norm(s2), 1e-3, 1e-15);
+  // A tensile normal force (the dashpot's pull at the end of a damped contact) carries no
+  // friction: the force and the spring are zero, however the contact slides.
+  Vec3 s3(1e-3, 0, 0);
+  const Vec3 f3 = tangential_force(s3, n, Vec3(1, 0, 0), dt, kt, 0, mu, -fn);
+  EXPECT_EQ(norm(f3), 0);
+  EXPECT_EQ(norm(s3), 0);
 }
 
 TEST(DemContactLaw, ContactForcePushesMasterOutAndDampsApproach) {
