@@ -198,11 +198,15 @@ const Vec3* DemSystem::find_spring(const ContactKey& k) const {
 
 // A grain's bounding sphere does not change as it turns, so the pair list stays valid while no
 // grain has moved more than half the skin: two grains then close the gap by at most one skin.
+// The list leaves out pairs of two bodies that are not free, so a body whose motion flag changed
+// (a fixed grain released, through bodies()) also makes it stale.
 bool DemSystem::pairs_stale() const {
   if (pairs_built_at_.size() != bodies_.size()) return true;
   const Real lim2 = Real(0.25) * skin_ * skin_;
-  for (std::size_t i = 0; i < bodies_.size(); ++i)
+  for (std::size_t i = 0; i < bodies_.size(); ++i) {
     if (!(norm2(bodies_[i].x - pairs_built_at_[i]) <= lim2)) return true;  // NaN: rebuild
+    if (bodies_[i].motion != pairs_built_motion_[i]) return true;
+  }
   return false;
 }
 
@@ -285,7 +289,11 @@ void DemSystem::build_pair_list() {
   pairs_.clear();
   ++pair_builds_;
   pairs_built_at_.resize(bodies_.size());
-  for (std::size_t i = 0; i < bodies_.size(); ++i) pairs_built_at_[i] = bodies_[i].x;
+  pairs_built_motion_.resize(bodies_.size());
+  for (std::size_t i = 0; i < bodies_.size(); ++i) {
+    pairs_built_at_[i] = bodies_[i].x;
+    pairs_built_motion_[i] = bodies_[i].motion;
+  }
   const Index n = Index(bodies_.size());
   // The skin: a quarter of the smallest bounding radius (LAMMPS-style Verlet list; the grains'
   // contact forces are unchanged, since a listed pair whose spheres do not touch adds nothing).

@@ -171,7 +171,8 @@ class DemSystem {
   std::vector<Vec3> force_, torque_, ext_force_, ext_torque_;
   std::vector<Vec3> acc_prev_, alpha_prev_;  // last step's dv/dt (world) and dw/dt (body)
   std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs_;
-  std::vector<Vec3> pairs_built_at_;  // centroids at the last pair build
+  std::vector<Vec3> pairs_built_at_;        // centroids at the last pair build
+  std::vector<Motion> pairs_built_motion_;  // motion flags at the last pair build
   // Each body's pairs in pair order (CSR): entry 2 pi + 0 when the body is the pair's first,
   // 2 pi + 1 when its second. Built with the pair list.
   std::vector<std::uint32_t> by_body_off_, by_body_;

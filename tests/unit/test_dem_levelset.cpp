@@ -215,10 +215,37 @@ TEST(DemSystemThreads, ForcesIndependentOfThreadsAndOfPairListAge) {
     EXPECT_EQ(one.first[i].y, two.first[i].y) << i;
     EXPECT_EQ(one.first[i].z, two.first[i].z) << i;
     EXPECT_EQ(one.first[i].x, fresh.first[i].x) << i;
+    EXPECT_EQ(one.first[i].y, fresh.first[i].y) << i;
     EXPECT_EQ(one.first[i].z, fresh.first[i].z) << i;
   }
   EXPECT_EQ(one.second, two.second);
   EXPECT_EQ(one.second, fresh.second);
+}
+
+// The pair list leaves out pairs of two non-free bodies. Releasing a fixed grain that touches
+// another fixed one (no grain moves, so no displacement would trigger a rebuild) must bring the
+// pair back: the released grain is pushed away at the next step.
+TEST(DemSystemPairs, ReleasingAFixedGrainRebuildsThePairList) {
+  DemParams p;
+  p.gravity = Vec3(0, 0, 0);
+  p.grain_grain.kn = p.grain_wall.kn = 1e4;
+  p.grain_grain.restitution = p.grain_wall.restitution = 0.5;
+  DemSystem sys(p);
+  const int s = sys.add_template(GrainTemplate::sphere(0.01));
+  // Overlapping by 1 mm, both fixed.
+  sys.add_body(s, 2500, Vec3(0, 0, 0), Quat{}, {}, {}, Motion::kFixed);
+  sys.add_body(s, 2500, Vec3(0.019, 0, 0), Quat{}, {}, {}, Motion::kFixed);
+  sys.step(1e-5);
+  EXPECT_EQ(sys.pair_count(), 0u);
+  EXPECT_EQ(norm(sys.force(1)), 0);
+  const std::size_t builds = sys.pair_builds();
+  sys.bodies()[1].motion = Motion::kFree;
+  sys.step(1e-5);
+  EXPECT_EQ(sys.pair_builds(), builds + 1);
+  EXPECT_EQ(sys.pair_count(), 1u);
+  // k_n d = 1e4 N/m x 1 mm = 10 N along +x on the released grain (plus a small dashpot term).
+  EXPECT_NEAR(sys.force(1).x, 10.0, 0.5);
+  EXPECT_GT(sys.bodies()[1].v.x, 0);
 }
 
 }  // namespace
