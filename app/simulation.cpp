@@ -85,6 +85,7 @@ std::unique_ptr<SolverBase> make_solver(
     const std::function<void(ParticleSet<Host>&, BuildReport&)>& prepare) {
   BuildReport rep;
   ParticleSet<Host> ps = build_particles(scene, &rep);
+  if (world_rank() == 0) describe_thin_solids(rep, scene.sph.dp, log);
   if (prepare) prepare(ps, rep);
   if (report) *report = rep;
   const Real c0 = resolve_sound_speed(scene, rep);
@@ -721,8 +722,9 @@ void check_scene(const Scene& scene, std::ostream& os) {
   const double cost = double(rep.fluid) * steps / (per_thread * host_thread_count());
   os << "scene '" << scene.name << "' (" << scene.source << "), " << scene.dim << "D\n"
      << grains.str() << "particles: fluid " << rep.fluid << ", wall boundary " << rep.wall
-     << ", grain boundary " << rep.grain << ", total " << ps.size() << "\n"
-     << "dp = " << p.dp << " m, h = " << p.h << " m, c0 = " << c0 << " m/s, cells " << p.grid.n[0]
+     << ", grain boundary " << rep.grain << ", total " << ps.size() << "\n";
+  describe_thin_solids(rep, scene.sph.dp, os);
+  os << "dp = " << p.dp << " m, h = " << p.h << " m, c0 = " << c0 << " m/s, cells " << p.grid.n[0]
      << " x " << p.grid.n[1] << " x " << p.grid.n[2] << "\n"
      << "memory estimate: " << std::setprecision(3) << mem / 1048576.0 << " MiB\n"
      << "time step estimate: " << dt << " s (force " << dt_f << ", acoustic " << dt_cv

@@ -95,6 +95,20 @@ Vec3 other_face_ghost(const geom::Sdf& sdf, const Vec3& x, const Vec3& n, Real d
   return ghost;
 }
 
+// Thickness of solid `sdf` behind boundary particle x along -n: its depth below the wet face
+// plus the distance to the other face (marched by the distance to the nearest surface, at least
+// dp/20). Returns `limit` when the solid is at least that thick.
+Real thickness_behind(const geom::Sdf& sdf, const Vec3& x, const Vec3& n, Real depth_x, Real limit,
+                      Real dp) {
+  Real t = 0;
+  for (int it = 0; it < 1000 && depth_x + t < limit; ++it) {
+    const Real ph = sdf.phi(x - n * t);
+    if (ph >= Real(0)) return depth_x + t - ph;
+    t += std::max(-ph, dp / Real(20));
+  }
+  return limit;
+}
+
 template <class F>
 void for_lattice(const Scene& scene, Vec3 lo, Vec3 hi, F&& f) {
   const Real dp = scene.sph.dp;
@@ -144,6 +158,9 @@ ParticleSet<Host> build_particles(const Scene& scene, BuildReport* report) {
 
   // Boundary particles: lattice points in the domain with -depth < phi < 0.
   const Real depth = boundary_depth(scene);
+  rep.boundary_depth = depth;
+  std::vector<Real> thin_min(scene.solids.size(), Real(0));
+  std::vector<Index> thin_count(scene.solids.size(), 0);
   std::vector<Vec3> bpos, bghost, balt, bnormal;
   std::vector<std::int32_t> bbody;
   // The domain bounds the fluid; walls may lie up to `depth` outside it (non-periodic axes).
@@ -199,6 +216,16 @@ ParticleSet<Host> build_particles(const Scene& scene, BuildReport* report) {
           other = k;
       if (other < dirs.size()) alt_ghost = x + dirs[other] * (Real(2) * dist[other]);
     }
+    // A first-layer particle of a face: is the solid behind it thinner than the boundary depth?
+    // (Half a spacing of slack: a lattice cannot resolve a thickness finer than that.)
+    if (!searched && depth_x < dp) {
+      const Real t = thickness_behind(sdf, x, n, depth_x, depth, dp);
+      if (t < depth - Real(0.5) * dp) {
+        const std::size_t s = std::size_t(which);
+        thin_min[s] = thin_count[s] == 0 ? t : std::min(thin_min[s], t);
+        ++thin_count[s];
+      }
+    }
     bpos.push_back(x);
     bghost.push_back(x + n * (Real(2) * depth_x));
     // A container's outer faces are dry: no second ghost there.
@@ -237,6 +264,8 @@ ParticleSet<Host> build_particles(const Scene& scene, BuildReport* report) {
   }
   rep.fluid = ps.n_fluid;
   rep.wall = ps.n_wall;
+  for (std::size_t s = 0; s < scene.solids.size(); ++s)
+    if (thin_count[s] > 0) rep.thin.push_back({scene.solids[s].name, thin_min[s], thin_count[s]});
 
   // Initial density: hydrostatic pressure from each block's surface, through the Tait EOS.
   const Real c0 = resolve_sound_speed(scene, rep);
@@ -257,6 +286,27 @@ ParticleSet<Host> build_particles(const Scene& scene, BuildReport* report) {
   }
   if (report) *report = rep;
   return ps;
+}
+
+void describe_thin_solids(const BuildReport& report, Real dp, std::ostream& os) {
+  // Solids of one thickness (a barrier's walls) share a line.
+  for (std::size_t a = 0; a < report.thin.size();) {
+    std::size_t b = a + 1;
+    Index particles = report.thin[a].particles;
+    while (b < report.thin.size() &&
+           std::fabs(report.thin[b].thickness - report.thin[a].thickness) <= Real(1e-3) * dp)
+      particles += report.thin[b++].particles;
+    os << "warning: solid" << (b - a > 1 ? "s " : " ");
+    for (std::size_t k = a; k < b; ++k)
+      os << (k > a ? (k + 1 == b ? " and '" : ", '") : "'") << report.thin[k].name << "'";
+    os << (b - a > 1 ? " are " : " is ") << report.thin[a].thickness * 1000 << " mm thick behind "
+       << particles << " wall particles, less than the boundary depth "
+       << report.boundary_depth * 1000
+       << " mm (2h, or sph.boundary_layers x dp, at dp = " << dp * 1000
+       << " mm): fluid there sees a truncated boundary and can leak through under impact; "
+          "make the solid at least that thick, or refine dp\n";
+    a = b;
+  }
 }
 
 Real resolve_sound_speed(const Scene& scene, const BuildReport& report) {

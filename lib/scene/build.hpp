@@ -3,15 +3,33 @@
 // mDBC ghost nodes r_G = r_B - 2 phi grad phi.
 #pragma once
 
+#include <ostream>
+#include <string>
+#include <vector>
+
 #include "scene/scene.hpp"
 #include "solver/particles.hpp"
 
 namespace sphdem {
 
+// A solid thinner than the boundary depth (the kernel support 2h, or sph.boundary_layers dp)
+// somewhere on its wet surface: fluid there sees a truncated boundary.
+struct ThinSolid {
+  std::string name;
+  Real thickness = 0;   // the least thickness found across the solid, behind its wet face [m]
+  Index particles = 0;  // boundary particles in its first layer where it is that thin
+};
+
 struct BuildReport {
   Index fluid = 0, wall = 0, grain = 0;
   Real fluid_height = 0;  // largest fluid depth along gravity, for c0
+  Real boundary_depth = 0;
+  std::vector<ThinSolid> thin;  // in scene order
 };
+
+// One line per thin solid of `report`, each starting with "warning: " and naming the solid, its
+// thickness, the boundary depth and the remedy; nothing when no solid is thin.
+void describe_thin_solids(const BuildReport& report, Real dp, std::ostream& os);
 
 ParticleSet<Host> build_particles(const Scene& scene, BuildReport* report = nullptr);
 

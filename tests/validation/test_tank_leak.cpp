@@ -114,6 +114,48 @@ TEST(TankLeak, GhostNodesMirrorIntoTheTank) {
 // The bottom-corner fluid particle stays in the tank (it was pushed out diagonally through the
 // corner within 0.07 s when the corner ghost nodes fell back to a Shepard average and the back
 // layers mirrored out through the dry face; issue #6 "3D wall-junction leak").
+// A tank wall thinner than the boundary depth is reported, with its thickness, by the build
+// (and so by `sphdem check` and at the start of a run); a thick one, or enough boundary layers,
+// is not.
+TEST(TankLeak, WallThinnerThanTheKernelIsReported) {
+  const std::string yaml_head = R"(
+name: thin_tank
+dimension: 2
+domain: {lo: [-0.05, -1, -0.05], hi: [0.25, 1, 0.25]}
+gravity: [0, 0, -9.81]
+fluid: {c0: 10, viscosity: {model: artificial, alpha: 0.05}}
+time: {end: 0.1}
+fluid_blocks:
+  - {lo: [0, 0, 0], hi: [0.1, 0, 0.1]}
+solids:
+  - name: tank
+)";
+  auto report = [&](const std::string& thickness, const std::string& sph) {
+    const Scene scene = parse_scene(yaml_head +
+                                        "    shape: {type: tank, inner_lo: [0, -0.5, 0], "
+                                        "inner_hi: [0.2, 0.5, 0.2], thickness: " +
+                                        thickness + "}\nsph: " + sph + "\n",
+                                    "thin_tank.yaml");
+    BuildReport rep;
+    build_particles(scene, &rep);
+    return rep;
+  };
+  // dp 5 mm, h = 1.2 sqrt(2) dp in 2D: 2h = 16.97 mm against a 12 mm wall (the shipped column
+  // collapse's tank).
+  const BuildReport thin = report("0.012", "{dp: 0.005, boundary: mdbc}");
+  ASSERT_EQ(thin.thin.size(), 1u);
+  EXPECT_EQ(thin.thin[0].name, "tank");
+  EXPECT_NEAR(thin.thin[0].thickness, 0.012, 1e-9);
+  EXPECT_GT(thin.thin[0].particles, 100);  // the floor and both side walls' first layer
+  std::ostringstream msg;
+  describe_thin_solids(thin, 0.005, msg);
+  EXPECT_NE(msg.str().find("warning: solid 'tank' is 12 mm thick"), std::string::npos) << msg.str();
+  EXPECT_NE(msg.str().find("boundary depth 16.97"), std::string::npos) << msg.str();
+  // 20 mm is more than 2h; and 2 layers of boundary (10 mm) fit in 12 mm.
+  EXPECT_TRUE(report("0.02", "{dp: 0.005, boundary: mdbc}").thin.empty());
+  EXPECT_TRUE(report("0.012", "{dp: 0.005, boundary: mdbc, boundary_layers: 2}").thin.empty());
+}
+
 TEST(TankLeak, ClosedTank3DCornerHolds) {
   const Scene scene = parse_scene(corner_tank_yaml(), "corner_tank.yaml");
   std::ostringstream log;
