@@ -54,7 +54,8 @@
 // tangential impulse than mu (1 + e) m Vcn, the rigid-body value the reference curves follow.
 //
 // ---- Hertz normal law for sphere pairs (Hertz 1882; Chung & Ooi 2011 tests 1-3) -----------------
-//   F_n = (4/3) E* sqrt(R*) d^{3/2} + c_H d^{1/4} d',  c_H = alpha(e) sqrt(m* (4/3) E* sqrt(R*)).
+//   F_n = max(0, (4/3) E* sqrt(R*) d^{3/2} + c_H d^{1/4} d'),
+//   c_H = alpha(e) sqrt(m* (4/3) E* sqrt(R*)).
 // With a damping force proportional to d^{1/4} d' (Tsuji et al. 1992) the restitution
 // coefficient does not depend on the impact speed. Unlike the linear law the Hertz force is
 // clamped at zero (never attractive). alpha(e) is found by solving the dimensionless oscillator
