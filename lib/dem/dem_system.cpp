@@ -486,34 +486,47 @@ void DemSystem::compute_forces(Real dt) {
       const geom::GridSdfView phi_s = ts.view();
       const Quat qs_inv = conjugate(s.q);
       const Real reach2 = ts.bounding_radius() * ts.bounding_radius();
-      const std::size_t nn = tm.nodes().size();
       const Vec3* wn = world_nodes_.data() + node_begin_[mi];
       const std::size_t si = mi == pairs_[std::size_t(pi)].first ? pairs_[std::size_t(pi)].second
                                                                  : pairs_[std::size_t(pi)].first;
       const Vec3 slo = box_lo_[si], shi = box_hi_[si];
-      for (std::size_t k = 0; k < nn; ++k) {
-        const Vec3& x = wn[k];
-        if (x.x < slo.x || x.x > shi.x || x.y < slo.y || x.y > shi.y || x.z < slo.z || x.z > shi.z)
+      const Real rs = ts.bounding_radius();
+      const std::uint32_t* order = tm.node_order().data();
+      for (const NodeGroup& g : tm.node_groups()) {
+        // An octant whose nodes all lie beyond the other grain's bounding sphere or box is skipped
+        // (most of a grain faces away from any one neighbour).
+        const Vec3 gc = m.x + rotate(m.q, g.centre);
+        const Real reach = g.radius + rs;
+        if (norm2(gc - s.x) > reach * reach) continue;
+        if (gc.x + g.radius < slo.x || gc.x - g.radius > shi.x || gc.y + g.radius < slo.y ||
+            gc.y - g.radius > shi.y || gc.z + g.radius < slo.z || gc.z - g.radius > shi.z)
           continue;
-        if (norm2(x - s.x) > reach2) continue;
-        const Vec3 y = rotate(qs_inv, x - s.x);
-        const Real ph = geom::grid_phi(phi_s, y);
-        if (!(ph < 0)) continue;
-        const Vec3 nb = geom::grid_normal(phi_s, y);
-        if (norm2(nb) == 0) continue;
-        const Vec3 nrm = rotate(s.q, nb);
-        const Real d = -ph;
-        const Vec3 v_rel = point_velocity(m, x) - point_velocity(s, x);
-        const ContactKey key{m.id, s.id, std::uint32_t(k)};
-        const Vec3* old = find_spring(key);
-        Vec3 spring = old ? *old : Vec3();
-        const Real inv_m = inverse_point_mass(m, x, nrm) + inverse_point_mass(s, x, nrm);
-        const Vec3 f = Real(0.5) * contact_force(at_point_mass(law, Real(1) / inv_m), d, nrm, v_rel,
-                                                 dt, spring, nullptr);
-        load_m.add(f, x, m.x);
-        load_s.add(-f, x, s.x);
-        out.max_d = std::max(out.max_d, d);
-        out.hist.push_back({key, spring});
+        for (std::uint32_t gi = g.begin; gi < g.end; ++gi) {
+          const std::size_t k = order[gi];
+          const Vec3& x = wn[k];
+          if (x.x < slo.x || x.x > shi.x || x.y < slo.y || x.y > shi.y || x.z < slo.z ||
+              x.z > shi.z)
+            continue;
+          if (norm2(x - s.x) > reach2) continue;
+          const Vec3 y = rotate(qs_inv, x - s.x);
+          const Real ph = geom::grid_phi(phi_s, y);
+          if (!(ph < 0)) continue;
+          const Vec3 nb = geom::grid_normal(phi_s, y);
+          if (norm2(nb) == 0) continue;
+          const Vec3 nrm = rotate(s.q, nb);
+          const Real d = -ph;
+          const Vec3 v_rel = point_velocity(m, x) - point_velocity(s, x);
+          const ContactKey key{m.id, s.id, std::uint32_t(k)};
+          const Vec3* old = find_spring(key);
+          Vec3 spring = old ? *old : Vec3();
+          const Real inv_m = inverse_point_mass(m, x, nrm) + inverse_point_mass(s, x, nrm);
+          const Vec3 f = Real(0.5) * contact_force(at_point_mass(law, Real(1) / inv_m), d, nrm,
+                                                   v_rel, dt, spring, nullptr);
+          load_m.add(f, x, m.x);
+          load_s.add(-f, x, s.x);
+          out.max_d = std::max(out.max_d, d);
+          out.hist.push_back({key, spring});
+        }
       }
     };
     pass(a, ta, pairs_[std::size_t(pi)].first, b, tb, out.a, out.b);

@@ -471,6 +471,7 @@ GrainTemplate GrainTemplate::from_sdf(const geom::Sdf& sdf, const std::vector<Ve
     }
   }
   if (is_sphere) t.bounding_radius_ = sphere_radius;
+  t.group_nodes();
   const Real h = t.spacing_;
   for (int d = 0; d < 3; ++d) {
     t.lo_[d] = blo[d] - opt.pad_cells * h;
@@ -612,6 +613,32 @@ GrainTemplate GrainTemplate::mesh(const geom::TriMesh& mesh_in, Real scale,
   // A finer grid for the source SDF so resampling it to the body frame loses little.
   const auto sdf = geom::make_mesh_sdf(m, opt.grid_spacing / 2, 2 * opt.pad_cells + 2);
   return from_sdf(*sdf, sample_triangles(m.vertices, m.triangles, ns), opt, false, 0);
+}
+
+void GrainTemplate::group_nodes() {
+  node_order_.clear();
+  groups_.clear();
+  for (int o = 0; o < 8; ++o) {
+    NodeGroup g;
+    g.begin = std::uint32_t(node_order_.size());
+    Vec3 lo(1e30, 1e30, 1e30), hi(-1e30, -1e30, -1e30);
+    for (std::size_t k = 0; k < nodes_.size(); ++k) {
+      const Vec3& y = nodes_[k];
+      const int ok = (y.x > 0 ? 1 : 0) | (y.y > 0 ? 2 : 0) | (y.z > 0 ? 4 : 0);
+      if (ok != o) continue;
+      node_order_.push_back(std::uint32_t(k));
+      for (int d = 0; d < 3; ++d) {
+        lo[d] = std::min(lo[d], y[d]);
+        hi[d] = std::max(hi[d], y[d]);
+      }
+    }
+    g.end = std::uint32_t(node_order_.size());
+    if (g.end == g.begin) continue;
+    g.centre = Real(0.5) * (lo + hi);
+    for (std::uint32_t i = g.begin; i < g.end; ++i)
+      g.radius = std::max(g.radius, norm(nodes_[node_order_[i]] - g.centre));
+    groups_.push_back(g);
+  }
 }
 
 std::string GrainTemplate::describe() const {

@@ -62,6 +62,15 @@ geom::SdfPtr make_polyhedron_sdf(const ConvexPolyhedron& poly);
 // (exact zero set, unit gradient on the surface; a close approximation of the distance nearby).
 geom::SdfPtr make_ellipsoid_sdf(Vec3 semi_axes);
 
+// The surface nodes of one octant of the body frame: node_order()[begin, end) are their indices,
+// within `radius` of `centre` (body frame). A contact pass skips an octant facing away from the
+// other grain without looking at its nodes.
+struct NodeGroup {
+  Vec3 centre;
+  Real radius = 0;
+  std::uint32_t begin = 0, end = 0;
+};
+
 class GrainTemplate {
  public:
   // ---- sources (all shapes are centred and rotated to principal axes on construction) -----
@@ -100,8 +109,11 @@ class GrainTemplate {
   Mat3 source_inertia_tensor() const { return tensor_; }
 
   const std::vector<Vec3>& nodes() const { return nodes_; }  // body frame
+  // The nodes' indices grouped by octant, and the groups (non-empty ones only).
+  const std::vector<std::uint32_t>& node_order() const { return node_order_; }
+  const std::vector<NodeGroup>& node_groups() const { return groups_; }
   geom::GridSdfView view() const {
-    return geom::GridSdfView{lo_, spacing_, {n_[0], n_[1], n_[2]}, phi_.data()};
+    return geom::GridSdfView{lo_, spacing_, {n_[0], n_[1], n_[2]}, phi_.data(), Real(1) / spacing_};
   }
   const std::vector<Real>& phi_values() const { return phi_; }
   Real grid_spacing() const { return spacing_; }
@@ -109,11 +121,14 @@ class GrainTemplate {
   std::string describe() const;  // node count, grid size and spacing, volume, inertia
 
  private:
+  void group_nodes();  // node_order_ and groups_ from nodes_
   bool is_sphere_ = false;
   Real radius_ = 0, bounding_radius_ = 0, volume_ = 0;
   Vec3 inertia_, centroid_;
   Mat3 rotation_{}, tensor_{};
   std::vector<Vec3> nodes_;
+  std::vector<std::uint32_t> node_order_;
+  std::vector<NodeGroup> groups_;
   Vec3 lo_;
   Real spacing_ = 0, node_spacing_ = 0;
   int n_[3] = {1, 1, 1};

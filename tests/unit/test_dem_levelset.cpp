@@ -222,6 +222,59 @@ TEST(DemSystemThreads, ForcesIndependentOfThreadsAndOfPairListAge) {
   EXPECT_EQ(one.second, fresh.second);
 }
 
+// The contact pass skips a grain's octants that face away from the other grain. Skipping must be
+// conservative: a brute-force count over every node of every pair, with the same filters (the
+// other grain's bounding sphere and padded node box), finds exactly the contact points the
+// system reports, in a jittered, randomly oriented lattice of overlapping pyramids.
+TEST(DemSystemPairs, OctantSkippingMissesNoContactNode) {
+  DemSystem sys(static_params(200));
+  const int r = sys.add_template(GrainTemplate::trigonal_pyramid(0.01, 0.15, 7));
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<Real> j(-0.0015, 0.0015);
+  for (int x = 0; x < 5; ++x)
+    for (int y = 0; y < 5; ++y)
+      for (int z = 0; z < 3; ++z)
+        sys.add_body(r, 2500, Vec3(0.0065 * x + j(rng), 0.0065 * y + j(rng), 0.0065 * z + j(rng)),
+                     random_quat(rng));
+  sys.compute_forces(0);
+  const GrainTemplate& t = sys.shape(r);
+  const auto& b = sys.bodies();
+  const Real pad = t.node_spacing(), rb = t.bounding_radius();
+  std::vector<Vec3> lo(b.size()), hi(b.size());
+  for (std::size_t i = 0; i < b.size(); ++i) {
+    lo[i] = hi[i] = b[i].x;
+    for (const Vec3& y : t.nodes()) {
+      const Vec3 x = b[i].x + rotate(b[i].q, y);
+      for (int d = 0; d < 3; ++d) {
+        lo[i][d] = std::min(lo[i][d], x[d]);
+        hi[i][d] = std::max(hi[i][d], x[d]);
+      }
+    }
+    lo[i] = lo[i] - Vec3(pad, pad, pad);
+    hi[i] = hi[i] + Vec3(pad, pad, pad);
+  }
+  std::size_t brute = 0;
+  for (std::size_t m = 0; m < b.size(); ++m)
+    for (std::size_t s = 0; s < b.size(); ++s) {
+      if (m == s || norm(b[m].x - b[s].x) > 2 * rb) continue;
+      for (const Vec3& y : t.nodes()) {
+        const Vec3 x = b[m].x + rotate(b[m].q, y);
+        bool in_box = true;
+        for (int d = 0; d < 3; ++d) in_box = in_box && x[d] >= lo[s][d] && x[d] <= hi[s][d];
+        if (!in_box || norm2(x - b[s].x) > rb * rb) continue;
+        const Vec3 yl = rotate(conjugate(b[s].q), x - b[s].x);
+        if (geom::grid_phi(t.view(), yl) < 0 && norm2(geom::grid_normal(t.view(), yl)) > 0) ++brute;
+      }
+    }
+  ASSERT_GT(brute, 50u) << "the lattice should overlap";
+  EXPECT_EQ(sys.contact_count(), brute);
+  // The octants partition the nodes.
+  std::vector<int> seen(t.nodes().size(), 0);
+  for (const NodeGroup& g : t.node_groups())
+    for (std::uint32_t i = g.begin; i < g.end; ++i) ++seen[t.node_order()[i]];
+  for (int c : seen) EXPECT_EQ(c, 1);
+}
+
 // The pair list leaves out pairs of two non-free bodies. Releasing a fixed grain that touches
 // another fixed one (no grain moves, so no displacement would trigger a rebuild) must bring the
 // pair back: the released grain is pushed away at the next step.

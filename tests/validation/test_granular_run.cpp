@@ -113,7 +113,7 @@ TEST(GranularRun, RockPileComesToRestAtTheDefaultStep) {
   const char* scene = R"(name: rock_pile
 dimension: 3
 domain: {lo: [-0.02, -0.02, -0.02], hi: [0.05, 0.05, 0.2]}
-time: {end: 0.5}
+time: {end: 0.6}
 solids:
   - name: box
     shape: {type: tank, inner_lo: [0, 0, 0], inner_hi: [0.03, 0.03, 0.15], thickness: 0.01}
@@ -143,12 +143,14 @@ diagnostics: {every: 0.01}
   for (std::size_t i = 1; i < rows.size(); ++i) {
     std::stringstream ss(rows[i]);
     ss >> t >> c >> ke >> c >> rest;
-    if (t > 0.4) ke_late = std::max(ke_late, ke);
+    if (t > 0.5) ke_late = std::max(ke_late, ke);
   }
-  std::printf("rock pile: kinetic energy %.3e J at t = %.3f s, largest after 0.4 s %.3e J\n", ke, t,
+  std::printf("rock pile: kinetic energy %.3e J at t = %.3f s, largest after 0.5 s %.3e J\n", ke, t,
               ke_late);
   // At rest: below 1e-10 J the 40 rocks (18 g) move at under 0.1 mm/s RMS (the old dashpots
-  // left ~1 cm/s).
+  // left ~1 cm/s). When a pile settles is a matter of its realization: a change of summation
+  // order alone (the octant grouping of 2026-12-01, same contacts to the node) moved one rock's
+  // last slide from before 0.4 s to 0.42 s (rest, 3e-12 J, by 0.47 s); hence 0.1 s of margin.
   EXPECT_LT(ke_late, 1e-10) << "the pile does not come to rest";
 }
 
