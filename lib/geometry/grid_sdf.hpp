@@ -18,8 +18,7 @@ struct GridSdfView {
   Real spacing;      // node spacing, equal along x, y and z
   int n[3];          // number of nodes along x, y, z (each >= 1)
   const Real* phi;   // n[0] * n[1] * n[2] values, x fastest
-  Real inv_spacing;  // 1 / spacing (the lookups multiply: a division per axis was a fifth of the
-                     // level-set contact pass)
+  Real inv_spacing;  // 1 / spacing: the lookups multiply (docs/BENCHMARKS.md, level-set profile)
 };
 
 namespace detail {

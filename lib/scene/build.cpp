@@ -76,34 +76,16 @@ Real exposure_distance(const Scene& scene, const Vec3& x, const Vec3& d, Real li
   return limit;
 }
 
-// The mirror of boundary particle x through its solid's other face, when that face is within
-// `depth` behind it along -n (a thin solid, such as a barrier wall a few dp thick, with fluid on
-// either side); otherwise `ghost` itself. The face is found by marching along -n inside the solid
-// by the distance to the nearest surface (a safe step), at least dp/20.
-Vec3 other_face_ghost(const geom::Sdf& sdf, const Vec3& x, const Vec3& n, Real depth_x, Real depth,
-                      Real dp, const Vec3& ghost) {
-  Real t = depth_x;  // the particle is depth_x inside the near face; start past the midpoint
-  t = std::max(t, Real(0));
-  for (int it = 0; it < 1000 && t < depth; ++it) {
+// Distance from boundary particle x, along -n, to where its solid ends (the far face of a thin
+// solid), marching from t0 by the distance to the nearest surface (a safe step), at least dp/20;
+// `limit` when the solid does not end within it. Used for the mirror through a thin solid's other
+// face and for the solid's thickness.
+Real far_face_distance(const geom::Sdf& sdf, const Vec3& x, const Vec3& n, Real t0, Real limit,
+                       Real dp) {
+  Real t = std::max(t0, Real(0));
+  for (int it = 0; it < 1000 && t < limit; ++it) {
     const Real ph = sdf.phi(x - n * t);
-    if (ph >= Real(0)) {
-      const Real s = t - ph;  // back to the face
-      return s < depth ? x - n * (Real(2) * s) : ghost;
-    }
-    t += std::max(-ph, dp / Real(20));
-  }
-  return ghost;
-}
-
-// Thickness of solid `sdf` behind boundary particle x along -n: its depth below the wet face
-// plus the distance to the other face (marched by the distance to the nearest surface, at least
-// dp/20). Returns `limit` when the solid is at least that thick.
-Real thickness_behind(const geom::Sdf& sdf, const Vec3& x, const Vec3& n, Real depth_x, Real limit,
-                      Real dp) {
-  Real t = 0;
-  for (int it = 0; it < 1000 && depth_x + t < limit; ++it) {
-    const Real ph = sdf.phi(x - n * t);
-    if (ph >= Real(0)) return depth_x + t - ph;
+    if (ph >= Real(0)) return t - ph;  // back to the face
     t += std::max(-ph, dp / Real(20));
   }
   return limit;
@@ -216,25 +198,30 @@ ParticleSet<Host> build_particles(const Scene& scene, BuildReport* report) {
           other = k;
       if (other < dirs.size()) alt_ghost = x + dirs[other] * (Real(2) * dist[other]);
     }
+    // The solid's far face behind x along -n, within the boundary depth: a thin solid with fluid
+    // on either side (a barrier wall a few dp thick) mirrors through it too. The particle is
+    // depth_x inside the near face, so that face's march starts past the midpoint. A container's
+    // outer faces are dry (no second ghost); its far face is looked for only from the first
+    // layer, for the thickness.
+    const bool dry = sdf.has_dry_faces();
+    Real far = depth;  // depth: no far face that near
+    if (!searched && !dry) far = far_face_distance(sdf, x, n, depth_x, depth, dp);
+    if (!searched && dry && depth_x < dp)
+      far = far_face_distance(sdf, x, n, 0, depth - depth_x, dp);
     // A first-layer particle of a face: is the solid behind it thinner than the boundary depth?
     // (Half a spacing of slack: a lattice cannot resolve a thickness finer than that.)
-    if (!searched && depth_x < dp) {
-      const Real t = thickness_behind(sdf, x, n, depth_x, depth, dp);
-      if (t < depth - Real(0.5) * dp) {
-        const std::size_t s = std::size_t(which);
-        thin_min[s] = thin_count[s] == 0 ? t : std::min(thin_min[s], t);
-        ++thin_count[s];
-      }
+    if (!searched && depth_x < dp && depth_x + far < depth - Real(0.5) * dp) {
+      const std::size_t s = std::size_t(which);
+      const Real t = depth_x + far;
+      thin_min[s] = thin_count[s] == 0 ? t : std::min(thin_min[s], t);
+      ++thin_count[s];
     }
     bpos.push_back(x);
     bghost.push_back(x + n * (Real(2) * depth_x));
-    // A container's outer faces are dry: no second ghost there.
     if (searched)
       balt.push_back(alt_ghost);
     else
-      balt.push_back(sdf.has_dry_faces() ? bghost.back()
-                                         : other_face_ghost(sdf, x, n, depth_x, depth, scene.sph.dp,
-                                                            bghost.back()));
+      balt.push_back(!dry && far < depth ? x - n * (Real(2) * far) : bghost.back());
     bnormal.push_back(n);
     bbody.push_back(which);
   });

@@ -266,6 +266,7 @@ TEST(DemSystemPairs, OctantSkippingMissesNoContactNode) {
         if (geom::grid_phi(t.view(), yl) < 0 && norm2(geom::grid_normal(t.view(), yl)) > 0) ++brute;
       }
     }
+  std::printf("octant skipping: %zu contact points by brute force\n", brute);
   ASSERT_GT(brute, 50u) << "the lattice should overlap";
   EXPECT_EQ(sys.contact_count(), brute);
   // The octants partition the nodes.
