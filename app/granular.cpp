@@ -223,9 +223,8 @@ RunResult run_granular(const Scene& scene, const RunOptions& opt) {
         next_frame += scene.frames.every;
       }
       // Moving walls and the packing drag.
-      for (std::size_t k = 0; k < scene.dem.walls.size(); ++k)
-        sys.walls()[std::size_t(build.wall_index[k])].velocity =
-            wall_velocity(scene.dem.walls[k], sys.time());
+      for (const std::string& gate : update_walls(scene, build, sys.time()))
+        log << "t = " << sys.time() << " s: solid '" << gate << "' removed (removed_at)\n";
       const bool damp = sys.time() < scene.dem.settle_until && scene.dem.settle_damping > 0;
       if (damp || damping_on) {
         for (std::size_t i = 0; i < sys.bodies().size(); ++i) {

@@ -213,7 +213,9 @@ class DiagnosticWriter {
     for (const auto& g : d.profiles) {
       profile_.emplace_back(path(g.name), Cols{"t", "s", "x", "y", "z_surface"}, append);
     }
-    if (d.energy) energy_.open(path("energy"), {"t", "kinetic", "potential", "total"}, append);
+    if (d.energy)
+      energy_.open(path("energy"), {"t", "kinetic", "potential", "total", "px", "py", "pz"},
+                   append);
     if (s.barrier.enabled) {
       Cols c{"t"};
       for (int k = 1; k <= s.barrier.walls; ++k) {
@@ -286,7 +288,8 @@ class DiagnosticWriter {
     }
     if (d.energy) {
       const Energy e = probe_energy(ps, scene_.gravity);
-      energy_.row({t, e.kinetic, e.potential, e.kinetic + e.potential});
+      energy_.row({t, e.kinetic, e.potential, e.kinetic + e.potential, e.momentum.x, e.momentum.y,
+                   e.momentum.z});
     }
     if (scene_.barrier.enabled) write_barrier(t, ps, p);
   }
@@ -381,6 +384,33 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
          << (one_step ? " s, one step for both phases (dem.subcycle: false)\n"
                       : " s, sub-cycled within each fluid step\n");
   }
+  // ---- a mean pressure gradient (scene.hpp PressureGradient): the fluid's body acceleration
+  // becomes g - G / rho0 and each grain feels -G V. Periodic axes only, so one rank. ----
+  std::vector<Vec3> gradient_force;  // -G V per grain
+  if (scene.pressure_gradient.enabled()) {
+    const ParticleSet<Host>& hp = solver->host_particles();
+    double fluid_mass = 0, grain_mass = 0, grain_volume = 0;
+    for (Index i = 0; i < hp.n_fluid; ++i) fluid_mass += double(hp.mass[i]);
+    if (coupling) {
+      for (const dem::RigidBody& b : dem.system->bodies()) {
+        grain_mass += double(b.mass);
+        grain_volume += double(dem.system->shape(b.shape).volume());
+      }
+    }
+    const double rho0 = double(scene.fluid.rho0);
+    const Vec3 G =
+        scene.pressure_gradient.weight
+            ? scene.gravity * Real((fluid_mass + grain_mass) / (fluid_mass / rho0 + grain_volume))
+            : scene.pressure_gradient.value;
+    solver->set_body_acceleration(scene.gravity - G / scene.fluid.rho0);
+    if (coupling)
+      for (const dem::RigidBody& b : dem.system->bodies())
+        gradient_force.push_back(-G * dem.system->shape(b.shape).volume());
+    const Vec3 a = solver->params().gravity;
+    slog << "pressure gradient: G = (" << G.x << ", " << G.y << ", " << G.z << ") Pa/m"
+         << (scene.pressure_gradient.weight ? " carries the weight of fluid and grains" : "")
+         << "; fluid body acceleration (" << a.x << ", " << a.y << ", " << a.z << ") m/s^2\n";
+  }
   MPI_Comm comm = ex ? ex->comm() : MPI_COMM_SELF;
   // What this rank writes (checkpoints, frames), and what rank 0 evaluates diagnostics on.
   // Calls f with this rank's share (one rank: the solver's particles, without a copy).
@@ -405,7 +435,12 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
   std::vector<std::int64_t> profile_state;
   if (restarting) {
     CheckpointData cp = read_checkpoint(restart_file);
-    check_checkpoint_matches(cp, scene, rep.wall + rep.grain, restart_file);
+    // A gate removed before the checkpoint left it without the gate's boundary particles.
+    Index boundary = rep.wall + rep.grain;
+    for (std::size_t s = 0; s < scene.solids.size(); ++s)
+      if (!scene.solids[s].removed_by(0) && scene.solids[s].removed_by(cp.counters.time))
+        boundary -= rep.wall_by_solid[s];
+    check_checkpoint_matches(cp, scene, boundary, restart_file);
     if (coupling) {
       if (cp.dem.bodies.empty())
         throw InputError(restart_file + ": holds no grains; it is not a checkpoint of '" +
@@ -501,6 +536,25 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
         << "/catalyst\n";
   // ---- end in situ ----
 
+  // ---- gates (Solid::removed_at): a solid removed by the current time takes its boundary
+  // particles out of the run and its DEM wall out of the contacts, right after the step that
+  // reaches removed_at (so no later checkpoint holds them). ----
+  std::vector<char> opened(scene.solids.size(), 0);
+  auto open_gates = [&]() {
+    for (std::size_t s = 0; s < scene.solids.size(); ++s) {
+      const Solid& so = scene.solids[s];
+      if (opened[s] || !so.removed_by(solver->time())) continue;
+      opened[s] = 1;
+      const Index n = so.removed_by(0) ? 0 : solver->remove_solid(std::int32_t(s));
+      if (so.removed_at > 0 && (n > 0 || !restarting))
+        log << "t = " << solver->time() << " s: solid '" << so.name
+            << "' removed (removed_at = " << so.removed_at << " s), " << n
+            << " boundary particles\n";
+    }
+    if (coupling) update_walls(scene, dem, dem.system->time());
+  };
+  open_gates();
+
   SignalGuard signals(opt.handle_signals);
   const bool tty = root && !opt.quiet && isatty(STDOUT_FILENO);  // rank 0 prints progress
   using clock = std::chrono::steady_clock;
@@ -540,6 +594,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
         // sub-steps no longer than the DEM step (contacts between grains and with walls).
         dem::DemSystem& sys = *dem.system;
         coupling->loads(solver->host_particles(), sys, grain_force, grain_torque);
+        for (std::size_t i = 0; i < gradient_force.size(); ++i) grain_force[i] += gradient_force[i];
         for (std::size_t i = 0; i < sys.bodies().size(); ++i)
           sys.set_external(i, grain_force[i], grain_torque[i]);
         const double want = std::ceil(double(st.dt) / double(dem.dt) - 1e-9);
@@ -551,13 +606,12 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
         const int nsub = std::max(1, int(want));
         const Real h = st.dt / Real(nsub);
         for (int k = 0; k < nsub; ++k) {
-          for (std::size_t w = 0; w < scene.dem.walls.size(); ++w)
-            sys.walls()[std::size_t(dem.wall_index[w])].velocity =
-                wall_velocity(scene.dem.walls[w], sys.time());
+          update_walls(scene, dem, sys.time());
           sys.step(h);
         }
         check_grain_guards(scene, sys, dem.min_diameter);
       }
+      open_gates();
       ++steps;
       particle_steps += double(solver->fluid_count());  // no device download
       if (st.removed > 0)
@@ -724,6 +778,20 @@ void check_scene(const Scene& scene, std::ostream& os) {
      << grains.str() << "particles: fluid " << rep.fluid << ", wall boundary " << rep.wall
      << ", grain boundary " << rep.grain << ", total " << ps.size() << "\n";
   describe_thin_solids(rep, scene.sph.dp, os);
+  for (std::size_t s = 0; s < scene.solids.size(); ++s) {
+    const Solid& so = scene.solids[s];
+    if (so.removed_by(0)) {
+      os << "solid '" << so.name << "': removed at t = 0 (removed_at), no boundary particles\n";
+    } else if (so.removed_at < Real(1e29)) {
+      os << "solid '" << so.name << "': " << rep.wall_by_solid[s]
+         << " boundary particles, removed at t = " << so.removed_at << " s (removed_at)\n";
+    }
+  }
+  if (scene.pressure_gradient.weight)
+    os << "pressure gradient: carries the weight of fluid and grains (periodic box)\n";
+  else if (scene.pressure_gradient.enabled())
+    os << "pressure gradient: (" << scene.pressure_gradient.value.x << ", "
+       << scene.pressure_gradient.value.y << ", " << scene.pressure_gradient.value.z << ") Pa/m\n";
   os << "dp = " << p.dp << " m, h = " << p.h << " m, c0 = " << c0 << " m/s, cells " << p.grid.n[0]
      << " x " << p.grid.n[1] << " x " << p.grid.n[2] << "\n"
      << "memory estimate: " << std::setprecision(3) << mem / 1048576.0 << " MiB\n"

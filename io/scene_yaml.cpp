@@ -12,6 +12,9 @@
 //     inside) periodic: [false, false, false]    # per axis; y cannot be periodic in 2D
 //   gravity: [0, 0, -9.81]       # m/s^2, each component in [-1000, 1000]; also the body force.
 //                                # 2D: the y component must be 0
+//   pressure_gradient: [0, 0, 0] # Pa/m, a uniform mean gradient along periodic axes (fluid:
+//                                # -G/rho0 per kg, grains: -G V); or `weight`: G carries the
+//                                # box's weight (every axis along gravity periodic; needs fluid)
 //   fluid:
 //     rho0: 1000                 # (0, 1e5] kg/m^3
 //     c0: 0                      # [0, 1e4] m/s; 0 = c0_factor * expected maximum speed
@@ -71,11 +74,17 @@
 //   solids:                      # a list; names are unique
 //     - name: tank               # required
 //       shape: {type: tank, inner_lo: [..], inner_hi: [..], thickness: 0.01}   # required
+//       boundary_regions: [{lo: [..], hi: [..]}]   # boundary particles only inside these boxes
+//       removed_at: 1e30         # [0, 1e6] s; the solid goes at this time (a gate that opens):
+//                                # its boundary particles, its DEM wall and its guard
 //   fluid_blocks:                # a list of boxes filled on the dp lattice, minus the solids
 //     - lo: [x, y, z]            # required; inside the domain
 //       hi: [x, y, z]            # required; hi > lo on the used axes, inside the domain
 //       velocity: [0, 0, 0]      # m/s, components in [-1000, 1000]; 2D: y must be 0
 //       hydrostatic: true        # initial pressure rho0 g (block top - z)
+//       level: none              # m; fill only below this free surface, a plane normal to
+//                                # gravity at height `level` along -g (from the origin): the
+//                                # block's water at rest; the pressure is rho0 g (level - height)
 //   diagnostics:                 # every name below is unique over all diagnostics
 //     every: 0.01                # (0, 1e4] s between CSV rows
 //     pressure_gauges: [{name: p1, point: [x, y, z]}]           # point inside the domain
@@ -511,6 +520,7 @@ class Parser {
 
   // ---- sections ----
   void parse_domain(const Field& f);
+  void parse_pressure_gradient(const Field& f, bool has_fluid);
   void parse_fluid(const Field& f);
   void parse_sph(const Field& f);
   void parse_time(const Field& f);
@@ -597,10 +607,10 @@ Scene Parser::parse(const YAML::Node& root) {
   Scene s;
   s.source = file_;  // also the base folder of mesh paths
   scene_ = &s;
-  MapReader top = map(
-      Field{root, root.Mark(), ""},
-      {"name", "dimension", "domain", "gravity", "fluid", "sph", "time", "guards", "checkpoint",
-       "parallel", "frames", "insitu", "solids", "barrier", "fluid_blocks", "diagnostics", "dem"});
+  MapReader top = map(Field{root, root.Mark(), ""},
+                      {"name", "dimension", "domain", "gravity", "pressure_gradient", "fluid",
+                       "sph", "time", "guards", "checkpoint", "parallel", "frames", "insitu",
+                       "solids", "barrier", "fluid_blocks", "diagnostics", "dem"});
   s.name = name(top.require("name"));
   s.dim = dim_ = integer(top.require("dimension"), 2, 3);
   parse_domain(top.require("domain"));
@@ -608,6 +618,8 @@ Scene Parser::parse(const YAML::Node& root) {
     s.gravity = vec3(*f, closed(-1e3, 1e3));
     check_planar(*f, s.gravity);
   }
+  if (auto f = top.find("pressure_gradient"))
+    parse_pressure_gradient(*f, bool(top.find("fluid_blocks")));
   if (auto f = top.find("fluid")) parse_fluid(*f);
   // A scene of grains only (a `dem` section and no fluid_blocks) needs no `sph` section.
   const bool grains_only = top.find("dem") && !top.find("fluid_blocks");
@@ -625,6 +637,37 @@ Scene Parser::parse(const YAML::Node& root) {
   if (auto f = top.find("dem")) parse_dem(*f);
   scene_ = nullptr;
   return s;
+}
+
+void Parser::parse_pressure_gradient(const Field& f, bool has_fluid) {
+  PressureGradient& g = scene_->pressure_gradient;
+  if (f.node.IsScalar() && !is_quoted(f.node) && f.node.Scalar() == "weight") {
+    g.weight = true;
+    if (!has_fluid) fail(f, "'weight' needs fluid (fluid_blocks); this scene has none");
+    const Vec3 w = scene_->gravity;
+    if (w.x == 0 && w.y == 0 && w.z == 0) fail(f, "'weight' needs gravity; gravity is zero");
+    for (int a = 0; a < 3; ++a) {
+      if (w[a] != 0 && !scene_->periodic[a]) {
+        fail(f, std::string("'weight' needs a box periodic along gravity; gravity.") + kAxis[a] +
+                    " = " + fmt(w[a]) + " but domain.periodic." + kAxis[a] +
+                    " is false (a wall carries the weight there)");
+      }
+    }
+    return;
+  }
+  if (f.node.IsScalar()) {
+    fail(f, "expected 'weight' or a list of 3 numbers [Pa/m], got '" + f.node.Scalar() + "'");
+  }
+  g.value = vec3(f, closed(-1e9, 1e9));
+  check_planar(f, g.value);
+  if (g.enabled() && !has_fluid) fail(f, "a pressure gradient needs fluid (fluid_blocks)");
+  for (int a = 0; a < 3; ++a) {
+    if (g.value[a] != 0 && !scene_->periodic[a]) {
+      fail(f, std::string("component ") + kAxis[a] + " = " + fmt(g.value[a]) +
+                  " is along a non-periodic axis (domain.periodic." + kAxis[a] +
+                  " is false); there the computed pressure carries the gradient");
+    }
+  }
 }
 
 void Parser::parse_domain(const Field& f) {
@@ -810,7 +853,7 @@ void Parser::parse_insitu(const Field& f) {
 void Parser::parse_solids(const Field& f) {
   std::map<std::string, std::string> seen;
   for (const Field& item : list(f)) {
-    MapReader m = map(item, {"name", "shape", "boundary_regions"});
+    MapReader m = map(item, {"name", "shape", "boundary_regions", "removed_at"});
     Field f_name = m.require("name");
     Solid solid;
     solid.name = name(f_name);
@@ -829,6 +872,7 @@ void Parser::parse_solids(const Field& f) {
       if (solid.boundary_regions.empty())
         fail(*fr, "an empty list would leave the solid without boundary particles; omit the key");
     }
+    solid.removed_at = m.number("removed_at", closed(0, 1e6), solid.removed_at);
     scene_->solids.push_back(std::move(solid));
   }
 }
@@ -1161,7 +1205,7 @@ geom::SdfPtr Parser::parse_shape(const Field& f) const {
 
 void Parser::parse_fluid_blocks(const Field& f) {
   for (const Field& item : list(f)) {
-    MapReader m = map(item, {"lo", "hi", "velocity", "hydrostatic"});
+    MapReader m = map(item, {"lo", "hi", "velocity", "hydrostatic", "level"});
     FluidBlock b;
     Field f_lo = m.require("lo");
     Field f_hi = m.require("hi");
@@ -1175,6 +1219,11 @@ void Parser::parse_fluid_blocks(const Field& f) {
       check_planar(*f_v, b.velocity);
     }
     b.hydrostatic = m.boolean("hydrostatic", b.hydrostatic);
+    if (auto f_l = m.find("level")) {
+      b.level = number(*f_l, kCoord);
+      b.has_level = true;
+      if (norm2(scene_->gravity) == 0) fail(*f_l, "a level surface needs gravity; gravity is zero");
+    }
     scene_->fluid_blocks.push_back(b);
   }
 }

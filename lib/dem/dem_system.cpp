@@ -547,6 +547,7 @@ void DemSystem::compute_forces(Real dt) {
       bool have_law = false;  // worked out at the first wall within reach
       for (std::size_t w = 0; w < walls_.size(); ++w) {
         const Wall& wall = walls_[w];
+        if (!wall.active) continue;  // an opened gate
         const Real phc = wall_phi(wall, b.x);
         if (phc > t.bounding_radius()) continue;
         if (!have_law) {

@@ -82,8 +82,9 @@ constexpr std::uint32_t kCentreNode = 0xFFFFFFFFu;   // the one contact point of
 struct Wall {
   geom::SdfPtr sdf;  // null: plane
   Vec3 point, normal;
-  Vec3 offset;    // SDF walls: phi(x) = sdf->phi(x - offset)
-  Vec3 velocity;  // translation speed (a baffle lifted at a prescribed speed)
+  Vec3 offset;         // SDF walls: phi(x) = sdf->phi(x - offset)
+  Vec3 velocity;       // translation speed (a baffle lifted at a prescribed speed)
+  bool active = true;  // false: touches no grain (a gate that has opened)
 };
 
 // Everything a bit-identical restart needs beyond what the scene rebuilds (templates, parameters,

@@ -80,6 +80,7 @@ void check_particle_guards(const Scene& scene, const StepParams& p, const Partic
   const Real tol = scene.guards.penetration_depth * p.dp;
   for (Index i = 0; i < ps.n_fluid; ++i) {
     for (const Solid& s : scene.solids) {
+      if (s.removed_by(time)) continue;  // an opened gate
       const Real phi = s.sdf->phi(ps.pos[i]);
       if (phi < -tol) {
         std::ostringstream d;

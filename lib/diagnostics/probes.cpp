@@ -109,6 +109,7 @@ Energy probe_energy(const ParticleSet<Host>& ps, const Vec3& gravity) {
   for (Index j = 0; j < ps.n_fluid; ++j) {
     e.kinetic += Real(0.5) * ps.mass[j] * norm2(ps.vel[j]);
     e.potential -= ps.mass[j] * dot(gravity, ps.pos[j]);
+    e.momentum += ps.mass[j] * ps.vel[j];
   }
   return e;
 }

@@ -39,8 +39,9 @@ Vec3 probe_solid_force(const ParticleSet<Host>& ps, int solid_index);
 
 struct Energy {
   Real kinetic = 0, potential = 0;
+  Vec3 momentum;  // sum of m v
 };
-// Fluid kinetic energy and potential energy -m g.x (relative to the origin).
+// Fluid kinetic energy, potential energy -m g.x (relative to the origin) and momentum.
 Energy probe_energy(const ParticleSet<Host>& ps, const Vec3& gravity);
 
 }  // namespace sphdem

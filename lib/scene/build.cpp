@@ -129,8 +129,10 @@ ParticleSet<Host> build_particles(const Scene& scene, BuildReport* report) {
       top = std::max(top, up);
       bottom = std::min(bottom, up);
     }
+    if (b.has_level) top = std::min(top, b.level);  // a level surface below the block's top
     rep.fluid_height = std::max(rep.fluid_height, top - bottom);
     for_lattice(scene, b.lo, b.hi, [&](const Vec3& x) {
+      if (b.has_level && -dot(x, ghat) > b.level) return;
       if (solids_phi(scene, x, nullptr) <= Real(0)) return;
       fpos.push_back(x);
       fvel.push_back(b.velocity);
@@ -158,6 +160,7 @@ ParticleSet<Host> build_particles(const Scene& scene, BuildReport* report) {
     // Depth and mirror from the wet surface (a tank's back layers mirror through its inner face).
     const Solid& solid = scene.solids[std::size_t(which)];
     if (!solid.in_boundary_region(x)) return;
+    if (solid.removed_by(0)) return;  // a gate open from the start
     const geom::Sdf& sdf = *solid.sdf;
     const Real phi = std::min(sdf.wet_phi(x), Real(0));
     if (!(phi > -depth)) return;
@@ -251,6 +254,8 @@ ParticleSet<Host> build_particles(const Scene& scene, BuildReport* report) {
   }
   rep.fluid = ps.n_fluid;
   rep.wall = ps.n_wall;
+  rep.wall_by_solid.assign(scene.solids.size(), 0);
+  for (std::int32_t b : bbody) ++rep.wall_by_solid[std::size_t(b)];
   for (std::size_t s = 0; s < scene.solids.size(); ++s)
     if (thin_count[s] > 0) rep.thin.push_back({scene.solids[s].name, thin_min[s], thin_count[s]});
 

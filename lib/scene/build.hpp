@@ -24,7 +24,8 @@ struct BuildReport {
   Index fluid = 0, wall = 0, grain = 0;
   Real fluid_height = 0;  // largest fluid depth along gravity, for c0
   Real boundary_depth = 0;
-  std::vector<ThinSolid> thin;  // in scene order
+  std::vector<ThinSolid> thin;       // in scene order
+  std::vector<Index> wall_by_solid;  // boundary particles of each solid, in scene order
 };
 
 // One line per thin solid of `report`, each starting with "warning: " and naming the solid, its

@@ -91,6 +91,20 @@ dem::DemParams dem_params(const Scene& scene) {
   return p;
 }
 
+std::vector<std::string> update_walls(const Scene& scene, const DemBuild& dem, Real t) {
+  std::vector<std::string> off;
+  for (std::size_t k = 0; k < scene.dem.walls.size(); ++k) {
+    dem::Wall& w = dem.system->walls()[std::size_t(dem.wall_index[k])];
+    w.velocity = wall_velocity(scene.dem.walls[k], t);
+    const Solid* s = scene.find_solid(scene.dem.walls[k].solid);
+    if (w.active && s && s->removed_by(t)) {
+      w.active = false;
+      off.push_back(s->name);
+    }
+  }
+  return off;
+}
+
 Vec3 wall_velocity(const GrainWall& w, Real t) {
   return (t >= w.start && t < w.stop) ? w.velocity : Vec3();
 }

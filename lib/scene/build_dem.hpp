@@ -4,6 +4,7 @@
 
 #include <iosfwd>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "dem/dem_system.hpp"
@@ -28,5 +29,10 @@ DemBuild build_dem(const Scene& scene, std::ostream& log);
 
 // The velocity of scene wall k at time t (its velocity in [start, stop), else 0).
 Vec3 wall_velocity(const GrainWall& w, Real t);
+
+// Sets each scene wall's velocity at time t, and switches off the walls whose solid has been
+// removed by t (Solid::removed_at: a gate that opens). Returns the names of the solids whose
+// walls went off in this call.
+std::vector<std::string> update_walls(const Scene& scene, const DemBuild& dem, Real t);
 
 }  // namespace sphdem

@@ -3,6 +3,7 @@
 // Units are SI throughout. Viscosities say whether they are dynamic (Pa s) or kinematic (m^2/s).
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -153,6 +154,12 @@ struct Solid {
   // where the flow can reach it; fluid that gets past a trimmed wall still trips the
   // fluid-inside-a-solid guard, since the SDF is whole.
   std::vector<std::pair<Vec3, Vec3>> boundary_regions;
+  // The solid goes at this time (a gate that opens): its boundary particles leave the run, a DEM
+  // wall made from it stops touching grains, and the fluid-inside-a-solid guard forgets it.
+  Real removed_at = Real(1e30);
+  bool removed_by(Real t) const {
+    return t >= removed_at - Real(1e-9) * std::max(removed_at, Real(1));
+  }
   bool in_boundary_region(const Vec3& x) const {
     if (boundary_regions.empty()) return true;
     for (const auto& [lo, hi] : boundary_regions)
@@ -166,6 +173,10 @@ struct FluidBlock {
   Vec3 lo, hi;              // filled on the dp lattice, minus solids
   Vec3 velocity;            // initial velocity
   bool hydrostatic = true;  // initial pressure rho0 g (surface - z), surface = block top
+  // A level free surface: only lattice points at height -g_hat . x <= level are filled, and the
+  // hydrostatic pressure starts from it (the block's water at rest under tilted gravity).
+  bool has_level = false;
+  Real level = 0;
 };
 
 struct PressureGauge {
@@ -298,6 +309,19 @@ struct DemScene {
   Real heap_floor = 0, heap_x_min = -1e30, heap_x_max = 1e30, heap_origin = 0;
 };
 
+// A uniform mean pressure gradient G [Pa/m] added to the computed pressure field. A periodic axis
+// makes the computed pressure periodic, so along it nothing carries a weight or drives a flow:
+// G does. Fluid particles feel -G / rho0 per unit mass, each grain -G V (its volume; a uniform
+// gradient acts at the centroid of a uniform grain). `weight` sets G to carry the whole box's
+// weight, G = (fluid mass + grain mass) g / (fluid mass / rho0 + grain volume), so the forces on
+// the box sum to zero and its momentum stays at zero: settling in a periodic array of grains.
+// Components along non-periodic axes must be 0.
+struct PressureGradient {
+  bool weight = false;
+  Vec3 value;  // Pa/m (weight = false)
+  bool enabled() const { return weight || value.x != 0 || value.y != 0 || value.z != 0; }
+};
+
 struct Scene {
   std::string source;  // file it came from
   std::string name;
@@ -305,6 +329,7 @@ struct Scene {
   Vec3 domain_lo, domain_hi;  // particles leaving it are removed and counted
   bool periodic[3] = {false, false, false};
   Vec3 gravity{0, 0, -9.81};
+  PressureGradient pressure_gradient;
   FluidParams fluid;
   SphParams sph;
   TimeParams time;

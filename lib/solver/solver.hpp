@@ -68,6 +68,13 @@ class SolverBase {
   // SPH-DEM coupling (lib/coupling): `f` moves the grain boundary slots (positions, ghost nodes,
   // normals, velocities) in host memory; the boundary range is then re-sorted.
   virtual void move_grains(const std::function<void(ParticleSet<Host>&)>& f) = 0;
+  // The fluid's body acceleration (default: scene.gravity); a mean pressure gradient G makes it
+  // gravity - G / rho0 (scene.hpp PressureGradient). Its direction also orients Fourtakas'
+  // hydrostatic density correction, which follows the pressure gradient the fluid carries.
+  virtual void set_body_acceleration(Vec3 a) = 0;
+  // Removes the boundary particles of solid index `solid` (a gate that opens); returns how many
+  // went.
+  virtual Index remove_solid(std::int32_t solid) = 0;
 };
 
 // Builds a solver on the host (OpenMP) or the device (CUDA). `particles` come from

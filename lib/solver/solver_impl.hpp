@@ -41,6 +41,11 @@ class Solver final : public SolverBase {
   Real time() const override { return time_; }
   std::int64_t step_count() const override { return step_; }
   const StepParams& params() const override { return p_; }
+  void set_body_acceleration(Vec3 a) override {
+    p_.gravity = a;
+    p_.g_mag = norm(a);
+    p_.g_hat = p_.g_mag > 0 ? a / p_.g_mag : Vec3();
+  }
   Index fluid_count() const override { return global_fluid_; }
   Index removed_count() const override { return removed_; }
   Real removed_mass() const override { return removed_mass_; }
@@ -644,6 +649,55 @@ class Solver final : public SolverBase {
   // After a rebalance: this rank's walls from the store for its new box. DBC walls carry their
   // integrated density, so the store takes the owners' current values first.
   void reselect_walls() {
+    store_wall_density();
+    on_host([&](ParticleSet<Host>& h) {
+      ParticleSet<Host> grains = take_grains(h);
+      take_walls(h);
+      append_walls(h, select_walls());
+      append_grains(h, std::move(grains));
+    });
+    rate_.resize(std::size_t(ps_.size()));
+    sort_boundary();
+    mark_wall_owners();
+  }
+
+  // A gate that opens (scene.hpp Solid::removed_at): the boundary particles of solid `solid`
+  // leave the run, on this rank and (many ranks) in the wall store. Halo copies are dropped and
+  // rebuilt by the next step. Returns how many boundary particles went (all ranks' walls: the
+  // store holds every one).
+  Index remove_solid(std::int32_t solid) override {
+    if (ex_) store_wall_density();
+    ParticleSet<Host> h;
+    if constexpr (std::is_same_v<Space, Host>) {
+      h = std::move(ps_);
+    } else {
+      to_host(Space{}, ps_, h);
+    }
+    ParticleSet<Host> grains = take_grains(h);
+    ParticleSet<Host> walls = take_walls(h);
+    h.for_each_field([&](const char*, auto& b) { b.vec().resize(std::size_t(h.n_fluid)); });
+    h.n_halo = 0;
+    ParticleSet<Host>& all = ex_ ? wall_store_ : walls;
+    ParticleSet<Host> kept;
+    std::vector<void*> out;
+    kept.for_each_field([&](const char*, auto& b) { out.push_back(&b); });
+    std::size_t k = 0;
+    all.for_each_field([&](const char*, auto& b) {
+      auto* o = static_cast<std::decay_t<decltype(b)>*>(out[k++]);
+      for (Index i = 0; i < all.n_wall; ++i)
+        if (all.body[std::size_t(i)] != solid) o->vec().push_back(b[std::size_t(i)]);
+    });
+    kept.n_wall = Index(kept.id.size());
+    const Index removed = all.n_wall - kept.n_wall;
+    append_walls(h, std::move(kept));
+    append_grains(h, std::move(grains));
+    adopt(std::move(h));
+    return removed;
+  }
+
+  // Many ranks, DBC: wall particles carry their integrated density, so before the store's walls
+  // are handed out again it takes the owners' current values.
+  void store_wall_density() {
     if (!p_.mdbc) {
       const ParticleSet<Host>& h = host_particles();
       const Index b = h.wall_begin(), n = h.size() - b;
@@ -659,15 +713,6 @@ class Solver final : public SolverBase {
       for (std::size_t i = 0; i < rho.size(); ++i)
         wall_store_.press[i] = tait_pressure(p_.eos, rho[i]);
     }
-    on_host([&](ParticleSet<Host>& h) {
-      ParticleSet<Host> grains = take_grains(h);
-      take_walls(h);
-      append_walls(h, select_walls());
-      append_grains(h, std::move(grains));
-    });
-    rate_.resize(std::size_t(ps_.size()));
-    sort_boundary();
-    mark_wall_owners();
   }
 
   // Which wall and grain slots this rank computes: those whose mDBC ghost node (or, with DBC,

@@ -55,7 +55,8 @@ struct BadFile {
 
 const BadFile kBadFiles[] = {
     {"unknown_top_key.yaml",
-     ":5: gravty: unknown key; allowed keys: name, dimension, domain, gravity, fluid, sph, time, "
+     ":5: gravty: unknown key; allowed keys: name, dimension, domain, gravity, pressure_gradient, "
+     "fluid, sph, time, "
      "guards, checkpoint, parallel, frames, insitu, solids, barrier, fluid_blocks, diagnostics, "
      "dem"},
     {"rheology_bad_model.yaml", ":5: fluid.rheology.model: 'bingham' is not one of newtonian, hbp"},
@@ -230,6 +231,31 @@ TEST(SceneYamlBadOverride, GivesExactMessage) {
     SCOPED_TRACE(c.overrides.back());
     EXPECT_EQ(input_error([&] { load_scene(path, c.overrides); }), c.message);
   }
+}
+
+// A mean pressure gradient only along periodic axes; `weight` only in a box periodic along gravity.
+TEST(SceneYamlPressureGradient, RefusedWhereAWallCarriesThePressure) {
+  const std::string tank = input_scene("hydrostatic_tank_2d.yaml");
+  EXPECT_EQ(input_error([&] { load_scene(tank, {"pressure_gradient=weight"}); }),
+            "--set pressure_gradient=weight: pressure_gradient: 'weight' needs a box periodic "
+            "along gravity; gravity.z = -9.81 but domain.periodic.z is false (a wall carries the "
+            "weight there)");
+  EXPECT_EQ(input_error([&] { load_scene(tank, {"pressure_gradient=[5, 0, 0]"}); }),
+            "--set pressure_gradient=[5, 0, 0]: pressure_gradient: component x = 5 is along a "
+            "non-periodic axis (domain.periodic.x is false); there the computed pressure carries "
+            "the gradient");
+  EXPECT_EQ(input_error([&] { load_scene(tank, {"pressure_gradient=up"}); }),
+            "--set pressure_gradient=up: pressure_gradient: expected 'weight' or a list of 3 "
+            "numbers [Pa/m], got 'up'");
+  const std::string settling = input_scene("sphere_settling.yaml");
+  EXPECT_EQ(input_error([&] { load_scene(settling, {"gravity=[0, 0, 0]"}); }),
+            settling + ":18: pressure_gradient: 'weight' needs gravity; gravity is zero");
+  const Scene s = load_scene(settling);
+  EXPECT_TRUE(s.pressure_gradient.weight);
+  EXPECT_TRUE(s.pressure_gradient.enabled());
+  const Scene v = load_scene(settling, {"pressure_gradient=[0, 0, -9810]"});
+  EXPECT_FALSE(v.pressure_gradient.weight);
+  EXPECT_REAL(v.pressure_gradient.value.z, -9810);
 }
 
 // ---- the scene files in inputs/ -------------------------------------------------------------

@@ -18,6 +18,7 @@
 #include "core/error.hpp"
 #include "io/checkpoint.hpp"
 #include "io/scene_yaml.hpp"
+#include "validation/run_files.hpp"
 
 namespace sphdem {
 namespace {
@@ -25,21 +26,6 @@ namespace {
 namespace fs = std::filesystem;
 
 const std::string kScene = std::string(SPHDEM_SOURCE_DIR) + "/inputs/floating_box.yaml";
-
-// Columns of a CSV file with a header row.
-std::vector<std::vector<double>> read_csv(const std::string& path) {
-  std::ifstream f(path);
-  std::string line;
-  std::getline(f, line);
-  std::vector<std::vector<double>> rows;
-  while (std::getline(f, line)) {
-    std::vector<double> r;
-    std::stringstream ss(line);
-    for (std::string cell; std::getline(ss, cell, ',');) r.push_back(std::stod(cell));
-    rows.push_back(r);
-  }
-  return rows;
-}
 
 RunResult run(const std::vector<std::string>& overrides, const std::string& out,
               std::int64_t max_steps = -1, const std::string& restart = "") {
@@ -85,9 +71,10 @@ const Floating& floating() {
     out.unstable = r.unstable;
     out.failure = r.failure;
     if (r.unstable) return out;
-    const auto body = read_csv("coupling_float/bodies.csv");   // t,id,x,y,z,...,fx,fy,fz,...
-    const auto surf = read_csv("coupling_float/surface.csv");  // t,h
-    const double end = body.back()[0], period = 0.5;           // heave period about 0.45-0.5 s
+    const auto body =
+        runfiles::read_numeric_csv("coupling_float/bodies.csv");  // t,id,x,y,z,...,fx,fy,fz,...
+    const auto surf = runfiles::read_numeric_csv("coupling_float/surface.csv");  // t,h
+    const double end = body.back()[0], period = 0.5;  // heave period about 0.45-0.5 s
     const Window z_end = window(body, 4, end - period, end);
     const Window s_end = window(surf, 1, end - period, end);
     const Window z_start = window(body, 4, 0, period);
@@ -135,8 +122,8 @@ TEST(Coupling, FloatingBoxDraftWithin3PercentAt16ParticlesAcross) {
            "diagnostics.height_gauges=[{name: surface, x: 0, y: 0}]"},
           "coupling_float16");
   ASSERT_FALSE(r.unstable) << r.failure;
-  const auto body = read_csv("coupling_float16/bodies.csv");   // t,id,x,y,z,...
-  const auto surf = read_csv("coupling_float16/surface.csv");  // t,h (same times)
+  const auto body = runfiles::read_numeric_csv("coupling_float16/bodies.csv");   // t,id,x,y,z,...
+  const auto surf = runfiles::read_numeric_csv("coupling_float16/surface.csv");  // t,h (same times)
   ASSERT_EQ(body.size(), surf.size());
   double sum = 0, lo = 1, hi = 0;
   int n = 0;
@@ -164,7 +151,7 @@ TEST(Coupling, NeutrallyBuoyantBoxStaysPut) {
                            "fluid_blocks[0].hi=[0.24,0.24,0.16]", "time.end=0.6"},
                           "coupling_neutral");
   ASSERT_FALSE(r.unstable) << r.failure;
-  const auto body = read_csv("coupling_neutral/bodies.csv");
+  const auto body = runfiles::read_numeric_csv("coupling_neutral/bodies.csv");
   double drift = 0;
   for (const auto& row : body)
     drift = std::max(drift, std::sqrt(std::pow(row[2] - 0.12, 2) + std::pow(row[3] - 0.12, 2) +
@@ -239,8 +226,9 @@ TEST(Coupling, SubcyclingMatchesOneStepForLessCost) {
               static_cast<long long>(sub.steps), sub.wall_seconds,
               static_cast<long long>(one.steps), one.wall_seconds);
   EXPECT_GT(one.steps, 5 * sub.steps) << "one step for both phases should take the DEM step";
-  const auto a = read_csv("beads_subcycled/bodies.csv");  // t,id,x,y,z,vx,vy,vz,...
-  const auto b = read_csv("beads_one_step/bodies.csv");
+  const auto a =
+      runfiles::read_numeric_csv("beads_subcycled/bodies.csv");  // t,id,x,y,z,vx,vy,vz,...
+  const auto b = runfiles::read_numeric_csv("beads_one_step/bodies.csv");
   ASSERT_EQ(a.size(), b.size());
   ASSERT_GE(a.size(), 3u * 10);
   const double d = 0.04, v_scale = std::sqrt(9.81 * d);

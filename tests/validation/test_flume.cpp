@@ -215,8 +215,9 @@ TEST(Flume, ShippedSceneWritesTheBarrierOutputs) {
                                                   "g2_depth", "g2_froude"}));
     for (const auto& row : v.rows) EXPECT_EQ(row[2], 0.0);  // the debris has not got there
     // The run-up profile: one file per requested time, and all of them in runup_profile.csv.
-    // Along the centreline the surface is the block's top (0.04327 m, to the lattice: the top
-    // layer's centres at 0.035 m) over x < 0, and the bed (0) downstream.
+    // Along the centreline the surface is the settled debris' level surface over x < 0,
+    // z = (0.06768 + sin15 x) / cos15 (16.5 mm deep upstream, 70 mm at the gate), to the lattice
+    // (dp = 10 mm), and the bed (0) downstream.
     const Csv all = read_csv(out + "/runup_profile.csv");
     EXPECT_EQ(all.rows.size(), 2u * 321u);
     for (const char* tag : {"0", "0.0002"}) {
@@ -226,15 +227,15 @@ TEST(Flume, ShippedSceneWritesTheBarrierOutputs) {
       for (const auto& row : pr.rows) {
         const double x = row[2], z = row[4];
         if (x > -0.19 && x < -0.01) {
-          EXPECT_NEAR(z, 0.04, 0.01) << tag << " x " << x;
+          const double level = (0.06768 + std::sin(kPi / 12) * x) / std::cos(kPi / 12);
+          EXPECT_NEAR(z, level, 0.01) << tag << " x " << x;
         }
         if (x > 0.05) {
           EXPECT_EQ(z, 0.0) << tag << " x " << x;
         }
       }
     }
-    // All 4.5 kg of debris is upstream of the barrier (to the lattice's rounding: 3200 particles
-    // of 1300 dp^3 = 4.16 kg at dp = 0.01, the block being 4.3 layers deep).
+    // All 4.5 kg of debris is upstream of the barrier (to the lattice's rounding at dp = 0.01).
     const Csv tr = read_csv(out + "/trap.csv");
     ASSERT_FALSE(tr.rows.empty());
     EXPECT_NEAR(tr.rows.back()[1], r.fluid * 1300 * 1e-6, 1e-9);

@@ -15,6 +15,7 @@
 #include "core/error.hpp"
 #include "io/checkpoint.hpp"
 #include "io/scene_yaml.hpp"
+#include "validation/run_files.hpp"
 
 namespace sphdem {
 namespace {
@@ -42,20 +43,6 @@ RunResult run(const Scene& s, const std::string& out, std::int64_t steps,
   return run_scene(s, o);
 }
 
-// Every field of every particle, keyed by global id, as raw bytes.
-std::map<GlobalId, std::string> state_by_id(const CheckpointData& cp) {
-  auto& ps = const_cast<ParticleSet<Host>&>(cp.particles);
-  std::map<GlobalId, std::string> m;
-  for (Index i = 0; i < ps.size(); ++i) {
-    std::string bytes;
-    ps.for_each_field([&](const char*, auto& b) {
-      bytes.append(reinterpret_cast<const char*>(&b[std::size_t(i)]), sizeof(b[0]));
-    });
-    m[ps.id[i]] = bytes;
-  }
-  return m;
-}
-
 TEST(Restart, ContinuesBitIdentically) {
   fs::remove_all("restart_straight");
   fs::remove_all("restart_resumed");
@@ -71,14 +58,14 @@ TEST(Restart, ContinuesBitIdentically) {
   EXPECT_EQ(a.counters.step, 300);
   EXPECT_EQ(b.counters.step, 300);
   EXPECT_EQ(a.counters.time, b.counters.time);  // bitwise
-  const auto ma = state_by_id(a), mb = state_by_id(b);
+  const auto ma = runfiles::state_by_id(a), mb = runfiles::state_by_id(b);
   ASSERT_EQ(ma.size(), mb.size());
   std::size_t differ = 0;
   for (const auto& [id, bytes] : ma) differ += (mb.at(id) != bytes);
   EXPECT_EQ(differ, 0u);
   // The comparison can fail: the state at step 200 differs from the one at 300.
   const CheckpointData c = read_checkpoint("restart_straight/checkpoint_0000000200.h5");
-  const auto mc = state_by_id(c);
+  const auto mc = runfiles::state_by_id(c);
   std::size_t changed = 0;
   for (const auto& [id, bytes] : ma) changed += (mc.at(id) != bytes);
   EXPECT_GT(changed, ma.size() / 2);
@@ -177,7 +164,7 @@ TEST(Restart, CheckpointWithoutBoundaryParticles) {
   EXPECT_EQ(back.particles.n_fluid, 100);
   EXPECT_EQ(back.particles.n_wall + back.particles.n_grain, 0);
   EXPECT_EQ(back.counters.step, 7);
-  EXPECT_EQ(state_by_id(back), state_by_id(cp));
+  EXPECT_EQ(runfiles::state_by_id(back), runfiles::state_by_id(cp));
 }
 
 TEST(Restart, KillDuringCheckpointWritesLeavesAUsableCheckpoint) {
