@@ -185,6 +185,11 @@ void write_state_csv(const ParticleSet<Host>& ps, const std::string& path) {
   }
 }
 
+std::vector<std::string> profile_columns(const ProfileSpec& p) {
+  if (p.velocity) return {"t", "s", "x", "y", "z", "u", "v", "w"};
+  return {"t", "s", "x", "y", "z_surface"};
+}
+
 // Diagnostics of a run: one CSV per named diagnostic.
 class DiagnosticWriter {
  public:
@@ -211,7 +216,7 @@ class DiagnosticWriter {
     for (const auto& g : d.forces)
       force_.emplace_back(path(g.name), Cols{"t", "fx", "fy", "fz"}, append);
     for (const auto& g : d.profiles) {
-      profile_.emplace_back(path(g.name), Cols{"t", "s", "x", "y", "z_surface"}, append);
+      profile_.emplace_back(path(g.name), profile_columns(g), append);
     }
     if (d.energy)
       energy_.open(path("energy"), {"t", "kinetic", "potential", "total", "px", "py", "pz"},
@@ -273,13 +278,18 @@ class DiagnosticWriter {
         // which is what a plot of the profile at 0.7 s wants to open.
         char tag[32];
         std::snprintf(tag, sizeof tag, "%g", double(pr.times[profile_next_[i]]));
-        CsvSeries at(dir_ + "/" + pr.name + "_" + tag + ".csv", {"t", "s", "x", "y", "z_surface"});
+        CsvSeries at(dir_ + "/" + pr.name + "_" + tag + ".csv", profile_columns(pr));
         for (int k = 0; k < n; ++k) {
           const Real s = Real(k) / Real(n - 1);
           const Vec3 x = pr.from + (pr.to - pr.from) * s;
-          const Real z = probe_surface_height(ps, p, x.x, x.y);
-          const std::vector<double> row{t, s * norm(pr.to - pr.from), x.x, x.y,
-                                        std::isfinite(z) ? z : 0.0};
+          std::vector<double> row{t, s * norm(pr.to - pr.from), x.x, x.y};
+          if (pr.velocity) {
+            const Vec3 u = probe_velocity(ps, p, x);
+            row.insert(row.end(), {x.z, u.x, u.y, u.z});
+          } else {
+            const Real z = probe_surface_height(ps, p, x.x, x.y);
+            row.push_back(std::isfinite(z) ? z : 0.0);
+          }
           profile_[i].row(row);
           at.row(row);
         }

@@ -93,6 +93,8 @@
 //     zero profiles: [{name: s, from: [..], to: [..], samples: 100, times: [0.1, 0.2]}]
 //                                # from, to required and distinct; samples [2, 1e6];
 //                                # times >= 0 and increasing (times after time.end never happen)
+//                                # quantity: surface (elevation above each point) | velocity
+//                                # (kernel-interpolated fluid velocity at each point)
 //     forces: [{name: floor_force, solid: tank}]                 # solid: the name of a solid
 //     energy: true
 //
@@ -262,6 +264,7 @@ const EnumTable<std::string> kContactLaws = {{"linear", "linear"}, {"hertz", "he
 const EnumTable<std::string> kBarrierPresets = {
     {"P00", "P00"}, {"P30", "P30"}, {"P45", "P45"}, {"V30", "V30"}, {"V45", "V45"}};
 const EnumTable<char> kBarrierLayouts = {{"P", 'P'}, {"V", 'V'}};
+const EnumTable<bool> kProfileQuantities = {{"surface", false}, {"velocity", true}};
 const EnumTable<bool> kBarrierApex = {{"upstream", true}, {"downstream", false}};
 const EnumTable<std::string> kPackPlacements = {{"shelf", "shelf"}, {"random", "random"}};
 
@@ -1282,7 +1285,7 @@ void Parser::parse_diagnostics(const Field& f) {
   }
   if (auto l = m.find("profiles")) {
     for (const Field& item : list(*l)) {
-      MapReader g = map(item, {"name", "from", "to", "samples", "times"});
+      MapReader g = map(item, {"name", "from", "to", "samples", "times", "quantity"});
       ProfileSpec ps;
       ps.name = diagnostic_name(g);
       ps.from = g.vec3("from", kCoord);
@@ -1290,6 +1293,7 @@ void Parser::parse_diagnostics(const Field& f) {
       ps.to = vec3(f_to, kCoord);
       if (norm2(ps.to - ps.from) == 0) fail(f_to, "must differ from 'from'");
       ps.samples = g.integer("samples", 2, 1000000, ps.samples);
+      ps.velocity = g.enumeration("quantity", kProfileQuantities, false);
       if (auto f_t = g.find("times")) {
         for (const Field& t : list(*f_t)) {
           Real v = number(t, closed(0, 1e6));

@@ -89,9 +89,10 @@ def run(args, label, cfg, res):
                 wall=summ["wall_seconds"], rms_error=err)
 
 
-def pareto(rows):
-    pts = sorted((float(r["wall"]), float(r["rms_error"]), r) for r in rows
-                 if r["status"] == "completed" and not math.isnan(float(r["rms_error"])))
+def pareto(rows, key="rms_error"):
+    """The runs no other run beats on both wall time and error (rows with r[key] the error)."""
+    pts = sorted((float(r["wall"]), float(r[key]), r) for r in rows
+                 if r["status"] == "completed" and not math.isnan(float(r[key])))
     front, best = [], float("inf")
     for w, e, r in pts:
         if e < best:

@@ -7,17 +7,30 @@
 
 namespace sphdem {
 
-Real probe_pressure(const ParticleSet<Host>& ps, const StepParams& p, const Vec3& point) {
-  Real num = 0, den = 0;
+namespace {
+// Shepard-normalised kernel interpolation at a point of the fluid field value(j).
+template <class T, class F>
+T shepard(const ParticleSet<Host>& ps, const StepParams& p, const Vec3& point, F&& value) {
+  T num{};
+  Real den = 0;
   for (Index j = 0; j < ps.n_fluid; ++j) {
     const Vec3 d = p.grid.separation(point, ps.pos[j]);
     const Real r2 = norm2(d);
     if (r2 >= p.radius2) continue;
     const Real w = kernel_w(p.kernel, std::sqrt(r2)) * ps.mass[j] / ps.rho[j];
-    num += ps.press[j] * w;
+    num += value(j) * w;
     den += w;
   }
-  return den > 0 ? num / den : Real(0);
+  return den > 0 ? num / den : T{};
+}
+}  // namespace
+
+Real probe_pressure(const ParticleSet<Host>& ps, const StepParams& p, const Vec3& point) {
+  return shepard<Real>(ps, p, point, [&](Index j) { return ps.press[j]; });
+}
+
+Vec3 probe_velocity(const ParticleSet<Host>& ps, const StepParams& p, const Vec3& point) {
+  return shepard<Vec3>(ps, p, point, [&](Index j) { return ps.vel[j]; });
 }
 
 Real probe_surface_height(const ParticleSet<Host>& ps, const StepParams& p, Real x, Real y) {

@@ -13,6 +13,8 @@ namespace sphdem {
 // Kernel-interpolated (Shepard-normalised) fluid pressure at a point; boundary particles are
 // ignored. Returns 0 where no fluid is within 2h.
 Real probe_pressure(const ParticleSet<Host>& ps, const StepParams& p, const Vec3& point);
+// The same for the fluid velocity (zero where no fluid is within 2h).
+Vec3 probe_velocity(const ParticleSet<Host>& ps, const StepParams& p, const Vec3& point);
 
 // Free-surface elevation on the vertical (along -g) line through (x, y): the highest point where
 // the fluid kernel sum sum_j V_j W(r - r_j) reaches 1/2. Returns NaN if no fluid is on the line.

@@ -192,11 +192,15 @@ struct FrontTracker {
   Vec3 origin;
   Vec3 direction{1, 0, 0};
 };
+// A line sampled at given times: the free-surface elevation above each sample point (surface:
+// columns t,s,x,y,z_surface), or the kernel-interpolated fluid velocity at it (velocity:
+// t,s,x,y,z,u,v,w; a velocity profile across a channel).
 struct ProfileSpec {
   std::string name;
   Vec3 from, to;
   int samples = 100;
   std::vector<Real> times;
+  bool velocity = false;
 };
 struct ForceProbe {
   std::string name;
