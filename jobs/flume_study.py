@@ -1,16 +1,25 @@
 #!/usr/bin/env python3
-"""Barrier-arrangement study on the slit-barrier flume (issue #6, seed §5.2): runs
-inputs/flume/flume.yaml once per preset, then writes OUT/summary.csv and OUT/summary.md with, per
-case, the opening ratio (from `sphdem check`), the peak force on the middle wall and its time, the
-final (static) force, the largest run-up, the trap ratio and the largest front speed (over 0.05 s
-windows of front.csv), and draws OUT/force.png (middle-wall force against time, every case on one
-axis) and OUT/profiles.png (centreline surface at the profile time).
+"""The slit-barrier flume studies (issue #6, seed §5.2-5.4), one case per run:
 
-  python3 jobs/flume_study.py --out runs/flume_study [--presets P00 P30 P45 V30 V45]
-      [--sphdem build/sphdem] [--set sph.dp=0.01 --set time.end=1.2 ...] [--summarize-only]
+  --study arrangement  inputs/flume/flume.yaml, one case per barrier preset (--presets)
+  --study fraction     boulders at the seed's solid volume fractions 0, 0.167, 0.334, 0.822 and
+                       1.176 % of the 3.46 L of debris: 0, 3, 5, 13, 19 glass beads
+                       (inputs/flume/flume_boulders.yaml; 0 is flume.yaml)
+  --study shape        13 boulders (0.822 %): 16 mm glass beads against irregular grains of the
+                       same volume (random convex polyhedra, 12 planes, 8 seeded variants)
 
-Each run goes to OUT/<preset>/ and is skipped if OUT/<preset>/summary.json says it completed
-(so an interrupted study continues). Extra --set options apply to every case.
+It writes OUT/summary.csv and OUT/summary.md with, per case, the opening ratio (from
+`sphdem check`), the peak force on the middle wall and its time, the final (static) force, the
+largest run-up, the trap ratio, the boulders upstream at the end, and the largest front speed
+(over 0.05 s windows of front.csv), and draws OUT/force.png (middle-wall force against time,
+every case on one axis) and OUT/profiles.png (centreline surface at the profile time).
+
+  python3 jobs/flume_study.py --out runs/flume_study [--study arrangement]
+      [--presets P00 P30 P45 V30 V45] [--sphdem build/sphdem]
+      [--set sph.dp=0.01 --set time.end=1.2 ...] [--summarize-only]
+
+Each run goes to OUT/<case>/ and is skipped if OUT/<case>/summary.json says it completed (so an
+interrupted study continues). Extra --set options apply to every case.
 """
 import argparse
 import csv
@@ -23,6 +32,23 @@ import sys
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 SCENE = os.path.join(ROOT, "inputs", "flume", "flume.yaml")
+BOULDERS = os.path.join(ROOT, "inputs", "flume", "flume_boulders.yaml")
+# The seed's solid volume fractions (§5.3) as bead counts: fraction x 3.46 L / (pi 0.016^3 / 6).
+FRACTIONS = [("0", 0), ("0.167%", 3), ("0.334%", 5), ("0.822%", 13), ("1.176%", 19)]
+IRREGULAR = ("dem.shapes[0]={name: bead, type: polyhedron, diameter: 0.016, planes: 12, "
+             "variants: 8, seed: 3}")
+
+
+def cases(study, presets):
+    """(name, scene, extra --set options) per case."""
+    if study == "arrangement":
+        return [(p, SCENE, ["barrier.preset=" + p]) for p in presets]
+    if study == "fraction":
+        return [("beads_%d" % n, SCENE if n == 0 else BOULDERS,
+                 [] if n == 0 else ["dem.packs[0].count=%d" % n]) for _, n in FRACTIONS]
+    if study == "shape":
+        return [("spheres_13", BOULDERS, []), ("irregular_13", BOULDERS, [IRREGULAR])]
+    raise SystemExit("unknown study " + study)
 
 
 def read_csv(path):
@@ -32,9 +58,9 @@ def read_csv(path):
     return header, [[float(v) for v in r] for r in rows[1:] if r]
 
 
-def opening_ratio(sphdem, preset, sets):
-    cmd = [sphdem, "check", SCENE, "--set", "barrier.preset=" + preset]
-    for s in sets:
+def opening_ratio(sphdem, scene, case_sets, sets):
+    cmd = [sphdem, "check", scene]
+    for s in case_sets + sets:
         cmd += ["--set", s]
     out = subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
     m = re.search(r"effective opening ratio ([0-9.]+)", out)
@@ -74,7 +100,11 @@ def summarize(run_dir):
                 j += 1
             if fr[i][0] - fr[j][0] >= 0.04:
                 speed = max(speed, (fr[i][1] - fr[j][1]) / (fr[i][0] - fr[j][0]))
+    grains_up = float("nan")
+    if tr and len(tr[-1]) > 3:
+        grains_up = tr[-1][3]
     return {
+        "grains_upstream": grains_up,
         "front_speed": speed,
         "t_end": t[-1] if t else 0.0,
         "peak_force_mid": f_mid[k] if rows else 0.0,
@@ -89,6 +119,7 @@ def summarize(run_dir):
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     ap.add_argument("--out", required=True)
+    ap.add_argument("--study", choices=["arrangement", "fraction", "shape"], default="arrangement")
     ap.add_argument("--presets", nargs="+", default=["P00", "P30", "P45", "V30", "V45"])
     ap.add_argument("--sphdem", default=os.path.join(ROOT, "build", "sphdem"))
     ap.add_argument("--set", dest="sets", action="append", default=[])
@@ -96,11 +127,11 @@ def main():
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
     results = []
-    for p in a.presets:
+    for p, scene, case_sets in cases(a.study, a.presets):
         run_dir = os.path.join(a.out, p)
         if not a.summarize_only and not finished(run_dir):
-            cmd = [a.sphdem, "run", SCENE, "--out", run_dir, "--set", "barrier.preset=" + p]
-            for s in a.sets:
+            cmd = [a.sphdem, "run", scene, "--out", run_dir]
+            for s in case_sets + a.sets:
                 cmd += ["--set", s]
             print(" ".join(cmd), flush=True)
             rc = subprocess.run(cmd).returncode
@@ -110,11 +141,11 @@ def main():
             continue
         r = summarize(run_dir)
         r["preset"] = p
-        r["opening_ratio"] = opening_ratio(a.sphdem, p, a.sets)
+        r["opening_ratio"] = opening_ratio(a.sphdem, scene, case_sets, a.sets)
         r["finished"] = finished(run_dir)
         results.append(r)
     cols = ["preset", "opening_ratio", "peak_force_mid", "t_peak", "static_force_mid",
-            "max_runup", "trap_ratio", "front_speed", "t_end", "finished"]
+            "max_runup", "trap_ratio", "grains_upstream", "front_speed", "t_end", "finished"]
     with open(os.path.join(a.out, "summary.csv"), "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(cols)
