@@ -25,6 +25,7 @@ void lattice_range(Real lo, Real hi, Real dp, long& i0, long& i1) {
 Real solids_phi(const Scene& scene, const Vec3& x, int* which) {
   Real best = Real(1e30);
   for (std::size_t s = 0; s < scene.solids.size(); ++s) {
+    if (scene.solids[s].removed_by(0)) continue;  // a gate open from the start: not there
     const Real v = scene.solids[s].sdf->phi(x);
     if (v < best) {
       best = v;
@@ -35,10 +36,16 @@ Real solids_phi(const Scene& scene, const Vec3& x, int* which) {
 }
 
 // Below zero inside a solid or behind a container's dry face (outside a tank): the space no fluid
-// reaches from the scene's wet side.
-Real open_phi(const Scene& scene, const Vec3& p) {
+// reaches from the scene's wet side. A solid that is removed during the run (a gate) does not
+// close space for the others: the floor under a gate must mirror into the space the gate leaves
+// (`own`: the solid whose particle asks, which sees itself).
+Real open_phi(const Scene& scene, const Vec3& p, int own) {
   Real best = Real(1e30);
-  for (const Solid& s : scene.solids) best = std::min(best, s.sdf->wet_phi(p));
+  for (std::size_t s = 0; s < scene.solids.size(); ++s) {
+    const Solid& so = scene.solids[s];
+    if (int(s) != own && so.removed_at < Real(1e29)) continue;
+    best = std::min(best, so.sdf->wet_phi(p));
+  }
   return best;
 }
 
@@ -65,11 +72,11 @@ const std::vector<Vec3>& search_directions(int dim) {
 
 // Distance from x along unit d to open space (open_phi > 0), or `limit` if farther. Steps by the
 // distance to the nearest surface (safe), at least dp/20.
-Real exposure_distance(const Scene& scene, const Vec3& x, const Vec3& d, Real limit) {
+Real exposure_distance(const Scene& scene, const Vec3& x, const Vec3& d, Real limit, int own) {
   const Real min_step = scene.sph.dp / Real(20);
   Real t = 0;
   for (int it = 0; it < 100000 && t < limit; ++it) {
-    const Real ph = open_phi(scene, x + d * t);
+    const Real ph = open_phi(scene, x + d * t, own);
     if (ph > Real(0)) return t;  // strictly: a face touching another solid is not open
     t += std::max(-ph, min_step);
   }
@@ -160,7 +167,6 @@ ParticleSet<Host> build_particles(const Scene& scene, BuildReport* report) {
     // Depth and mirror from the wet surface (a tank's back layers mirror through its inner face).
     const Solid& solid = scene.solids[std::size_t(which)];
     if (!solid.in_boundary_region(x)) return;
-    if (solid.removed_by(0)) return;  // a gate open from the start
     const geom::Sdf& sdf = *solid.sdf;
     const Real phi = std::min(sdf.wet_phi(x), Real(0));
     if (!(phi > -depth)) return;
@@ -181,12 +187,12 @@ ParticleSet<Host> build_particles(const Scene& scene, BuildReport* report) {
     // second ghost, and the solver uses whichever sees more fluid.
     bool searched = false;
     Vec3 alt_ghost;
-    if (!(open_phi(scene, x - n * (Real(2) * phi)) > Real(0))) {
+    if (!(open_phi(scene, x - n * (Real(2) * phi), which) > Real(0))) {
       const auto& dirs = search_directions(scene.dim);
       std::vector<Real> dist(dirs.size());
       std::size_t best = dirs.size();
       for (std::size_t k = 0; k < dirs.size(); ++k) {
-        dist[k] = exposure_distance(scene, x, dirs[k], depth);
+        dist[k] = exposure_distance(scene, x, dirs[k], depth, which);
         if (dist[k] < depth && (best == dirs.size() || dist[k] < dist[best])) best = k;
       }
       if (best == dirs.size()) return;  // buried: no exposed surface within the kernel support

@@ -20,7 +20,22 @@ grep -q "3 ranks" "$work/many/run.log"
 # The first part ends with its own closing row (at the checkpoint time, off the output schedule);
 # apart from that row the series must be identical.
 t200=$(grep -o "at t = [0-9.e-]* s, step 200" "$work/many/run.log" | awk '{print $4}')
-for f in energy.csv front.csv; do
+# energy.csv's last three columns, the fluid momentum, are compared apart: components that are
+# zero by symmetry hold only round-off (1e-18 kg m/s), which the order of the sums over ranks
+# changes. They must agree to 1e-9 of the row's largest component.
+cut -d, -f1-4 "$work/one/energy.csv" > "$work/one/energy4.csv"
+cut -d, -f1-4 "$work/many/energy.csv" > "$work/many/energy4.csv"
+if ! awk -F, -v t200="$t200" 'NR == FNR { a[$1] = $0; next } FNR > 1 && ($1 in a) {
+      split(a[$1], o, ","); m = 0
+      for (k = 5; k <= 7; ++k) { v = o[k] < 0 ? -o[k] : o[k]; if (v > m) m = v }
+      for (k = 5; k <= 7; ++k) { d = o[k] - $k; if (d < 0) d = -d; if (d > 1e-9 * m + 1e-30) { print "row t = " $1 ": " a[$1] " vs " $0; bad = 1 } }
+      ++n }
+    END { if (n < 40) { print "only " n " common rows"; bad = 1 } exit bad }' \
+    "$work/one/energy.csv" "$work/many/energy.csv"; then
+  echo "FAIL: the fluid momentum in energy.csv differs between one rank and 2 ranks + restart on 3"
+  exit 1
+fi
+for f in energy4.csv front.csv; do
   extra=$(diff "$work/one/$f" "$work/many/$f" | grep '^>' | cut -c3- || true)
   missing=$(diff "$work/one/$f" "$work/many/$f" | grep '^<' || true)
   if [ -n "$missing" ] || [ "$(printf '%s\n' "$extra" | grep -c .)" -gt 1 ] ||
@@ -37,4 +52,4 @@ if [ "$one_blocks" -lt 4 ] || ! diff <(grep -o 'NumberOfElements="[0-9]*"' "$wor
     <(grep -o 'NumberOfElements="[0-9]*"' "$work/many/frames.xdmf"); then
   echo "FAIL: frames.xdmf blocks differ between one rank and 2 ranks + restart on 3"; exit 1
 fi
-echo "restart across ranks: energy.csv and front.csv identical ($rows rows), frames agree"
+echo "restart across ranks: energy.csv (momentum to 1e-9) and front.csv identical ($rows rows), frames agree"
