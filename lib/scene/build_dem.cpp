@@ -96,8 +96,8 @@ std::vector<std::string> update_walls(const Scene& scene, const DemBuild& dem, R
   for (std::size_t k = 0; k < scene.dem.walls.size(); ++k) {
     dem::Wall& w = dem.system->walls()[std::size_t(dem.wall_index[k])];
     w.velocity = wall_velocity(scene.dem.walls[k], t);
-    const Solid* s = scene.find_solid(scene.dem.walls[k].solid);
-    if (w.active && s && s->removed_by(t)) {
+    const Solid* s = dem.wall_solid[k];  // resolved at build: no name lookup per sub-step
+    if (w.active && s->removed_at < Real(1e29) && s->removed_by(t)) {
       w.active = false;
       off.push_back(s->name);
     }
@@ -250,6 +250,7 @@ DemBuild build_dem(const Scene& scene, std::ostream& log) {
   for (const GrainWall& w : d.walls) {
     const Solid* s = scene.find_solid(w.solid);
     out.wall_index.push_back(sys.add_sdf_wall(s->sdf, wall_velocity(w, 0)));
+    out.wall_solid.push_back(s);
   }
   out.dt = scene.time.dt_fixed > 0 ? scene.time.dt_fixed : d.dt_factor * sys.time_step();
   if (scene.time.dt_fixed <= 0 && scene.time.dt_max > 0)

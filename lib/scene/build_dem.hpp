@@ -16,10 +16,11 @@ dem::DemParams dem_params(const Scene& scene);
 
 struct DemBuild {
   std::unique_ptr<dem::DemSystem> system;
-  std::vector<int> wall_index;  // scene.dem.walls[k] -> system wall index
-  Real min_diameter = 0;        // smallest equivalent diameter of any grain
-  Real max_radius = 0;          // largest bounding radius
-  Real dt = 0;                  // the step: time.dt_fixed, or dt_factor * t_c / 50
+  std::vector<int> wall_index;           // scene.dem.walls[k] -> system wall index
+  std::vector<const Solid*> wall_solid;  // scene.dem.walls[k] -> its solid (in the Scene)
+  Real min_diameter = 0;                 // smallest equivalent diameter of any grain
+  Real max_radius = 0;                   // largest bounding radius
+  Real dt = 0;                           // the step: time.dt_fixed, or dt_factor * t_c / 50
 };
 
 // Builds the templates, places the packs and adds the walls; writes one line per template
