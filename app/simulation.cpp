@@ -18,6 +18,7 @@
 #include "cuda/device.hpp"
 #include "decomposition/distributed.hpp"
 #include "diagnostics/guards.hpp"
+#include "diagnostics/mirror.hpp"
 #include "diagnostics/probes.hpp"
 #include "io/checkpoint.hpp"
 #include "io/csv_series.hpp"
@@ -27,6 +28,7 @@
 #include "granular.hpp"
 #include "scene/barrier.hpp"
 #include "scene/build_dem.hpp"
+#include "solver/mirror_exchange.hpp"
 #include "run_common.hpp"
 
 namespace sphdem {
@@ -99,6 +101,34 @@ std::unique_ptr<SolverBase> make_solver(
                      std::to_string(procs[2]) + " asks for " + std::to_string(asked) +
                      " ranks, but this run has 1 (start it with mpirun -n " +
                      std::to_string(asked) + ")");
+  if (nranks > 1 && scene.symmetry.enabled())
+    throw InputError(scene.source +
+                     ": symmetry: a symmetry plane runs on one rank only for now "
+                     "(this run has " +
+                     std::to_string(nranks) + " ranks)");
+  std::shared_ptr<Exchange> mirror;
+  if (scene.symmetry.enabled()) {
+    const StepParams p = make_step_params(scene, c0);
+    const SymmetryPlane& sym = scene.symmetry;
+    mirror = std::make_shared<MirrorExchange>(sym, (Real(2.02) + scene.parallel.skin) * p.h,
+                                              Real(2.02) * p.h);
+    log << "symmetry plane "
+        << "xyz"[sym.axis] << " = " << sym.at << ", modelling "
+        << "xyz"[sym.axis] << (sym.keep > 0 ? " > " : " < ") << sym.at << ": "
+        << rep.symmetry_fluid_dropped << " fluid and " << rep.symmetry_walls_dropped
+        << " wall particles of the full scene not built; diagnostics report the mirrored full "
+           "scene\n";
+    std::vector<std::string> unpaired;
+    mirror_solids(scene, &unpaired);
+    for (const std::string& w : unpaired)
+      log << "warning: symmetry: " << w
+          << " has no mirror image among the barrier walls; impact_force.csv gives it its "
+             "modelled part plus that part's mirror image\n";
+    if (rep.symmetry_unmatched > 0)
+      log << "warning: symmetry: " << rep.symmetry_unmatched
+          << " wall particles within 2h of the plane have no mirror image among the walls (the "
+             "walls are not symmetric about it): the run is not the full scene's half\n";
+  }
   if (nranks > 1) {
     const StepParams p = make_step_params(scene, c0);
     for (int k = 0; k < 3; ++k)
@@ -168,8 +198,8 @@ std::unique_ptr<SolverBase> make_solver(
   } else {
     log << "backend: host, " << host_thread_count() << " OpenMP threads\n";
   }
-  if (device) return make_device_solver(scene, std::move(ps), c0);
-  return make_host_solver(scene, std::move(ps), c0);
+  if (device) return make_device_solver(scene, std::move(ps), c0, mirror);
+  return make_host_solver(scene, std::move(ps), c0, mirror);
 }
 
 namespace {
@@ -246,6 +276,16 @@ class DiagnosticWriter {
   }
 
   void write(Real t, const ParticleSet<Host>& ps, const StepParams& p) {
+    // A symmetry plane: every diagnostic reads the mirrored full scene.
+    if (scene_.symmetry.enabled()) {
+      if (mirror_.empty()) mirror_ = mirror_solids(scene_);
+      write_full(t, mirror_full(ps, scene_.symmetry, mirror_), p);
+    } else {
+      write_full(t, ps, p);
+    }
+  }
+
+  void write_full(Real t, const ParticleSet<Host>& ps, const StepParams& p) {
     const Diagnostics& d = scene_.diagnostics;
     for (std::size_t i = 0; i < d.pressure_gauges.size(); ++i)
       pressure_[i].row({t, probe_pressure(ps, p, d.pressure_gauges[i].point)});
@@ -334,6 +374,7 @@ class DiagnosticWriter {
   std::string dir_;
   std::vector<CsvSeries> pressure_, height_, front_, force_, profile_;
   std::vector<std::size_t> profile_next_;
+  std::vector<std::int32_t> mirror_;  // symmetry plane: each solid's mirror image
   CsvSeries energy_, impact_, runup_, trap_, velocity_;
 };
 
@@ -802,6 +843,21 @@ void check_scene(const Scene& scene, std::ostream& os) {
   else if (scene.pressure_gradient.enabled())
     os << "pressure gradient: (" << scene.pressure_gradient.value.x << ", "
        << scene.pressure_gradient.value.y << ", " << scene.pressure_gradient.value.z << ") Pa/m\n";
+  if (scene.symmetry.enabled()) {
+    const SymmetryPlane& sym = scene.symmetry;
+    os << "symmetry plane: "
+       << "xyz"[sym.axis] << " = " << sym.at << ", modelling "
+       << "xyz"[sym.axis] << (sym.keep > 0 ? " > " : " < ") << sym.at << " (the full scene has "
+       << rep.fluid + rep.symmetry_fluid_dropped << " fluid particles; "
+       << rep.symmetry_walls_dropped << " wall particles across the plane not built)\n";
+    if (rep.symmetry_unmatched > 0)
+      os << "warning: symmetry: " << rep.symmetry_unmatched
+         << " wall particles within 2h of the plane have no mirror image among the walls\n";
+    std::vector<std::string> unpaired;
+    mirror_solids(scene, &unpaired);
+    for (const std::string& w : unpaired)
+      os << "warning: symmetry: " << w << " has no mirror image among the barrier walls\n";
+  }
   os << "dp = " << p.dp << " m, h = " << p.h << " m, c0 = " << c0 << " m/s, cells " << p.grid.n[0]
      << " x " << p.grid.n[1] << " x " << p.grid.n[2] << "\n"
      << "memory estimate: " << std::setprecision(3) << mem / 1048576.0 << " MiB\n"

@@ -15,6 +15,12 @@
 //   pressure_gradient: [0, 0, 0] # Pa/m, a uniform mean gradient along periodic axes (fluid:
 //                                # -G/rho0 per kg, grains: -G V); or `weight`: G carries the
 //                                # box's weight (every axis along gravity periodic; needs fluid)
+//   symmetry: {axis: y, at: 0.2, keep: above}
+//                                # optional symmetry plane x_axis = at (3D; axis x|y|z, not
+//                                # periodic; at strictly inside the domain): only the `keep` side
+//                                # (above|below) is modelled, the plane is a mirror (free slip);
+//                                # one rank, no grains (dem); diagnostics report the mirrored
+//                                # full scene, frames and checkpoints hold the modelled side
 //   fluid:
 //     rho0: 1000                 # (0, 1e5] kg/m^3
 //     c0: 0                      # [0, 1e4] m/s; 0 = c0_factor * expected maximum speed
@@ -265,6 +271,8 @@ const EnumTable<std::string> kBarrierPresets = {
     {"P00", "P00"}, {"P30", "P30"}, {"P45", "P45"}, {"V30", "V30"}, {"V45", "V45"}};
 const EnumTable<char> kBarrierLayouts = {{"P", 'P'}, {"V", 'V'}};
 const EnumTable<bool> kProfileQuantities = {{"surface", false}, {"velocity", true}};
+const EnumTable<int> kSymmetryAxes = {{"x", 0}, {"y", 1}, {"z", 2}};
+const EnumTable<int> kSymmetrySides = {{"above", 1}, {"below", -1}};
 const EnumTable<bool> kBarrierApex = {{"upstream", true}, {"downstream", false}};
 const EnumTable<std::string> kPackPlacements = {{"shelf", "shelf"}, {"random", "random"}};
 
@@ -524,6 +532,7 @@ class Parser {
   // ---- sections ----
   void parse_domain(const Field& f);
   void parse_pressure_gradient(const Field& f, bool has_fluid);
+  void parse_symmetry(const Field& f);
   void parse_fluid(const Field& f);
   void parse_sph(const Field& f);
   void parse_time(const Field& f);
@@ -611,9 +620,9 @@ Scene Parser::parse(const YAML::Node& root) {
   s.source = file_;  // also the base folder of mesh paths
   scene_ = &s;
   MapReader top = map(Field{root, root.Mark(), ""},
-                      {"name", "dimension", "domain", "gravity", "pressure_gradient", "fluid",
-                       "sph", "time", "guards", "checkpoint", "parallel", "frames", "insitu",
-                       "solids", "barrier", "fluid_blocks", "diagnostics", "dem"});
+                      {"name", "dimension", "domain", "gravity", "pressure_gradient", "symmetry",
+                       "fluid", "sph", "time", "guards", "checkpoint", "parallel", "frames",
+                       "insitu", "solids", "barrier", "fluid_blocks", "diagnostics", "dem"});
   s.name = name(top.require("name"));
   s.dim = dim_ = integer(top.require("dimension"), 2, 3);
   parse_domain(top.require("domain"));
@@ -638,6 +647,15 @@ Scene Parser::parse(const YAML::Node& root) {
   if (auto f = top.find("fluid_blocks")) parse_fluid_blocks(*f);
   if (auto f = top.find("diagnostics")) parse_diagnostics(*f);
   if (auto f = top.find("dem")) parse_dem(*f);
+  if (auto f = top.find("symmetry")) {
+    parse_symmetry(*f);
+    if (top.find("dem"))
+      fail(*f, "a symmetry plane needs a scene without grains (dem): grains are not mirrored");
+    if (s.sph.boundary == BoundaryMethod::kDbc)
+      fail(*f,
+           "a symmetry plane needs sph.boundary: mdbc (a DBC wall's density sums the fluid on "
+           "both sides of the plane, and the mirror copies are not summed into walls)");
+  }
   scene_ = nullptr;
   return s;
 }
@@ -671,6 +689,23 @@ void Parser::parse_pressure_gradient(const Field& f, bool has_fluid) {
                   " is false); there the computed pressure carries the gradient");
     }
   }
+}
+
+void Parser::parse_symmetry(const Field& f) {
+  if (dim_ != 3) fail(f, "a symmetry plane needs dimension 3");
+  MapReader m = map(f, {"axis", "at", "keep"});
+  SymmetryPlane& s = scene_->symmetry;
+  s.axis = enumeration(m.require("axis"), kSymmetryAxes);
+  const Field fa = m.require("at");
+  s.at = number(fa, kCoord);
+  s.keep = m.enumeration("keep", kSymmetrySides, 1);
+  const int a = s.axis;
+  if (scene_->periodic[a])
+    fail(fa, std::string("the plane is normal to a periodic axis (domain.periodic.") + kAxis[a] +
+                 " is true)");
+  if (!(s.at > scene_->domain_lo[a] && s.at < scene_->domain_hi[a]))
+    fail(fa, "value " + fmt(s.at) + " is not strictly inside the domain along " + kAxis[a] + " (" +
+                 fmt(scene_->domain_lo[a]) + ", " + fmt(scene_->domain_hi[a]) + ")");
 }
 
 void Parser::parse_domain(const Field& f) {

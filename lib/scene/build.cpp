@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <unordered_set>
 
 #include "core/error.hpp"
 #include "sph/eos.hpp"
@@ -147,6 +148,33 @@ ParticleSet<Host> build_particles(const Scene& scene, BuildReport* report) {
     });
   }
 
+  // A symmetry plane: the fluid on the mirrored side goes; a lattice row on the plane would
+  // overlap its own mirror image.
+  const SymmetryPlane& sym = scene.symmetry;
+  const Real h = scene.h();
+  if (sym.enabled()) {
+    std::size_t w = 0;
+    for (std::size_t i = 0; i < fpos.size(); ++i) {
+      const Real d = sym.side(fpos[i]);
+      if (std::fabs(d) < Real(0.25) * dp) {
+        std::ostringstream os;
+        os << scene.source << ": symmetry.at: " << sym.at << " lies on a row of fluid particles ("
+           << "xyz"[sym.axis] << " = " << fpos[i][sym.axis] << "); put the plane halfway between "
+           << "two rows (move it by dp/2 = " << Real(0.5) * dp << " m)";
+        throw InputError(os.str());
+      }
+      if (d < 0) continue;
+      fpos[w] = fpos[i];
+      fvel[w] = fvel[i];
+      fsurface[w] = fsurface[i];
+      ++w;
+    }
+    rep.symmetry_fluid_dropped = Index(fpos.size() - w);
+    fpos.resize(w);
+    fvel.resize(w);
+    fsurface.resize(w);
+  }
+
   // Boundary particles: lattice points in the domain with -depth < phi < 0.
   const Real depth = boundary_depth(scene);
   rep.boundary_depth = depth;
@@ -217,6 +245,11 @@ ParticleSet<Host> build_particles(const Scene& scene, BuildReport* report) {
     if (!searched && !dry) far = far_face_distance(sdf, x, n, depth_x, depth, dp);
     if (!searched && dry && depth_x < dp)
       far = far_face_distance(sdf, x, n, 0, depth - depth_x, dp);
+    // Beyond 2h on the mirrored side of a symmetry plane no fluid reaches a wall.
+    if (sym.enabled() && sym.side(x) <= Real(-2.02) * h) {
+      ++rep.symmetry_walls_dropped;
+      return;
+    }
     // A first-layer particle of a face: is the solid behind it thinner than the boundary depth?
     // (Half a spacing of slack: a lattice cannot resolve a thickness finer than that.)
     if (!searched && depth_x < dp && depth_x + far < depth - Real(0.5) * dp) {
@@ -262,6 +295,22 @@ ParticleSet<Host> build_particles(const Scene& scene, BuildReport* report) {
   rep.wall = ps.n_wall;
   rep.wall_by_solid.assign(scene.solids.size(), 0);
   for (std::int32_t b : bbody) ++rep.wall_by_solid[std::size_t(b)];
+  if (sym.enabled()) {
+    // The walls near the plane on the modelled side and their mirror images: a run that models
+    // half of a scene equals the full run only if they are there.
+    auto key = [&](const Vec3& x) {
+      const Real q = Real(1e-3) * dp;
+      auto c = [&](Real v) { return static_cast<long long>(std::llround(v / q)); };
+      return std::to_string(c(x.x)) + "," + std::to_string(c(x.y)) + "," + std::to_string(c(x.z));
+    };
+    std::unordered_set<std::string> at;
+    for (const Vec3& x : bpos) at.insert(key(x));
+    for (const Vec3& x : bpos) {
+      const Real d = sym.side(x);
+      if (d > 0 && d < Real(2) * h && !at.count(key(sym.reflect_point(x))))
+        ++rep.symmetry_unmatched;
+    }
+  }
   for (std::size_t s = 0; s < scene.solids.size(); ++s)
     if (thin_count[s] > 0) rep.thin.push_back({scene.solids[s].name, thin_min[s], thin_count[s]});
 

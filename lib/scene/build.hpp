@@ -26,6 +26,10 @@ struct BuildReport {
   Real boundary_depth = 0;
   std::vector<ThinSolid> thin;       // in scene order
   std::vector<Index> wall_by_solid;  // boundary particles of each solid, in scene order
+  // Symmetry plane (scene.symmetry): fluid and walls dropped on the mirrored side, and the wall
+  // particles within 2h of the plane on the modelled side without a mirror image among the walls
+  // (0 when the walls are symmetric about the plane).
+  Index symmetry_fluid_dropped = 0, symmetry_walls_dropped = 0, symmetry_unmatched = 0;
 };
 
 // One line per thin solid of `report`, each starting with "warning: " and naming the solid, its

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "core/symmetry.hpp"
 #include "core/types.hpp"
 #include "geometry/sdf.hpp"
 
@@ -334,6 +335,7 @@ struct Scene {
   bool periodic[3] = {false, false, false};
   Vec3 gravity{0, 0, -9.81};
   PressureGradient pressure_gradient;
+  SymmetryPlane symmetry;  // core/symmetry.hpp; axis -1 = none
   FluidParams fluid;
   SphParams sph;
   TimeParams time;

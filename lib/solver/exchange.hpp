@@ -19,6 +19,10 @@
 
 namespace sphdem {
 
+// What a Vec3 field holds, for an exchange whose halo copies are transformed images of their
+// owners (a symmetry plane's mirror, solver/mirror_exchange.hpp); a plain copy ignores it.
+enum class HaloField { kValue, kVelocity, kOffDiagonal };
+
 class Exchange {
  public:
   virtual ~Exchange() = default;
@@ -40,6 +44,7 @@ class Exchange {
   virtual void bcast(const Real* owned, Real* halo) = 0;
   virtual void bcast(const Vec3* owned, Vec3* halo) = 0;
   virtual void bcast_positions(const Vec3* owned, Vec3* halo) = 0;
+  virtual void bcast_field(const Vec3* owned, Vec3* halo, HaloField) { bcast(owned, halo); }
   // Walls: 1 for each of n wall particles this rank keeps (within the halo width of its box, or,
   // by_ghost, with the ghost node in its box).
   virtual std::vector<std::uint8_t> keep_walls(const Vec3* pos, const Vec3* ghost, Index n,

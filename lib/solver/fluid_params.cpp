@@ -42,6 +42,7 @@ StepParams make_step_params(const Scene& scene, Real c0) {
   p.sps_ci = scene.fluid.sps.ci;
   p.domain_lo = scene.domain_lo;
   p.domain_hi = scene.domain_hi;
+  p.sym = scene.symmetry;
   // The grid covers the domain plus the boundary depth, so wall particles outside the fluid
   // domain still have cells. A 10% skin keeps the symplectic half step inside neighbour cells.
   const Real skin = scene.time.integrator == Integrator::kSymplectic ? Real(1.1) : Real(1.0);

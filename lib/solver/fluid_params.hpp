@@ -1,6 +1,7 @@
 // Parameters of the fluid step, resolved from the scene once. Passed by value into kernels.
 #pragma once
 
+#include "core/symmetry.hpp"
 #include "core/types.hpp"
 #include "neighbor/cell_grid.hpp"
 #include "sph/eos.hpp"
@@ -37,6 +38,7 @@ struct StepParams {
   bool sps = false;  // Dalrymple & Rogers SPS stress
   Real sps_cs = 0, sps_ci = 0;
   Vec3 domain_lo, domain_hi;
+  SymmetryPlane sym;  // fluid that crosses it is reflected back (core/symmetry.hpp)
 };
 
 // Resolves the step parameters from a scene and the derived speed of sound.

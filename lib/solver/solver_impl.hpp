@@ -106,7 +106,7 @@ class Solver final : public SolverBase {
       auto t1 = tick();
       times_.cell_list += std::chrono::duration<double>(t1 - t0).count();
       refresh_halo(ps_.pos, true);
-      refresh_halo(ps_.vel);
+      refresh_halo(ps_.vel, false, HaloField::kVelocity);
       refresh_halo(ps_.rho);
       sort_range(ps_.n_fluid, ps_.n_halo, halo_cells_);
       follow(leaf_at_, halo_cells_);
@@ -123,7 +123,7 @@ class Solver final : public SolverBase {
     if (symplectic) {
       symplectic_predict(Space{}, v, 0, nf, dt, p_.eos);
       refresh_halo(ps_.pos, true);
-      refresh_halo(ps_.vel);
+      refresh_halo(ps_.vel, false, HaloField::kVelocity);
       refresh_halo(ps_.rho);
       evaluate_rates();
       symplectic_correct(Space{}, v, 0, nf, dt, p_.eos);
@@ -243,7 +243,7 @@ class Solver final : public SolverBase {
       if (p_.hbp) refresh_halo(visc_);
       if (p_.sps) {
         refresh_halo(sps_d_);
-        refresh_halo(sps_o_);
+        refresh_halo(sps_o_, false, HaloField::kOffDiagonal);
       }
     }
     auto t1 = tick();
@@ -352,6 +352,12 @@ class Solver final : public SolverBase {
             const Real lo = p.grid.lo[k];
             while (x[k] < lo) x[k] += L;
             while (x[k] >= lo + L) x[k] -= L;
+          }
+          // Fluid that crossed a symmetry plane comes back as its mirror image.
+          if (p.sym.enabled() && p.sym.side(x) < 0) {
+            x = p.sym.reflect_point(x);
+            v.vel[i] = p.sym.reflect_vector(v.vel[i]);
+            v.vel_prev[i] = p.sym.reflect_vector(v.vel_prev[i]);
           }
           v.pos[i] = x;
         });
@@ -501,7 +507,8 @@ class Solver final : public SolverBase {
   // Sends the owned values of a field to the halo slots. The plan's roots and leaves are in the
   // order of the last rebuild; root_at_ and leaf_at_ map the current slots to them.
   template <class T>
-  void refresh_halo(Buffer<T, Space>& field, bool positions = false) {
+  void refresh_halo(Buffer<T, Space>& field, bool positions = false,
+                    HaloField kind = HaloField::kValue) {
     if (!ex_) return;  // collective: every rank calls it, with or without halo slots
     host_valid_ = false;
     const Index nf = ps_.n_fluid, nh = ps_.n_halo;
@@ -510,7 +517,7 @@ class Solver final : public SolverBase {
     std::vector<T> roots(static_cast<std::size_t>(std::max<Index>(nf, 1)));
     for (Index i = 0; i < nf; ++i) roots[root_at_[std::size_t(i)]] = f[i];
     std::vector<T> leaves(static_cast<std::size_t>(std::max<Index>(nh, 1)));
-    bcast_one(roots.data(), leaves.data(), positions);
+    bcast_one(roots.data(), leaves.data(), positions, kind);
     for (Index j = 0; j < nh; ++j) f[nf + j] = leaves[leaf_at_[std::size_t(j)]];
     put_host<T>(field, tmp);
   }
@@ -563,12 +570,12 @@ class Solver final : public SolverBase {
     return m[0] > 0 || m[1] > half * half;
   }
 
-  void bcast_one(Real* owned, Real* halo, bool) { ex_->bcast(owned, halo); }
-  void bcast_one(Vec3* owned, Vec3* halo, bool positions) {
+  void bcast_one(Real* owned, Real* halo, bool, HaloField) { ex_->bcast(owned, halo); }
+  void bcast_one(Vec3* owned, Vec3* halo, bool positions, HaloField kind) {
     if (positions) {
       ex_->bcast_positions(owned, halo);
     } else {
-      ex_->bcast(owned, halo);
+      ex_->bcast_field(owned, halo, kind);
     }
   }
 

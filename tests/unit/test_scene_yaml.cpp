@@ -56,7 +56,7 @@ struct BadFile {
 const BadFile kBadFiles[] = {
     {"unknown_top_key.yaml",
      ":5: gravty: unknown key; allowed keys: name, dimension, domain, gravity, pressure_gradient, "
-     "fluid, sph, time, "
+     "symmetry, fluid, sph, time, "
      "guards, checkpoint, parallel, frames, insitu, solids, barrier, fluid_blocks, diagnostics, "
      "dem"},
     {"rheology_bad_model.yaml", ":5: fluid.rheology.model: 'bingham' is not one of newtonian, hbp"},

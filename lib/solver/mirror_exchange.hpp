@@ -1,0 +1,59 @@
+// A symmetry plane on one rank (scene key `symmetry`, core/symmetry.hpp) as an Exchange: its halo
+// is the mirror image of the owned fluid within `width` of the plane, refreshed every step like a
+// rank's halo (positions and velocities reflected, the SPS stress's off-diagonal signs flipped,
+// scalars copied). The fluid near the plane thus sees a complete kernel support, and the plane
+// acts as a free-slip wall without boundary particles. Every wall is kept and owned; no
+// migration, no wall plan, reductions are identities.
+//
+// The width covers the kernel support 2h plus the skin, and also reaches 2h past the deepest
+// mDBC ghost node of the kept walls on the mirrored side (a wall particle just across the plane
+// interpolates its state from mirror fluid around its ghost node).
+#pragma once
+
+#include <vector>
+
+#include "core/symmetry.hpp"
+#include "solver/exchange.hpp"
+
+namespace sphdem {
+
+class MirrorExchange final : public Exchange {
+ public:
+  // width: the halo width on the fluid's side of the plane (2h + skin); support: 2h.
+  MirrorExchange(const SymmetryPlane& plane, Real width, Real support);
+
+  int rank() const override { return 0; }
+  int size() const override { return 1; }
+  bool owns(const Vec3&) const override { return true; }
+  void migrate(ParticleSet<Host>&) override {}
+  bool rebalance(ParticleSet<Host>&) override { return false; }
+  void build_halo(ParticleSet<Host>& ps) override;
+  Index halo_count() const override { return Index(source_.size()); }
+  void bcast(const Real* owned, Real* halo) override;
+  void bcast(const Vec3* owned, Vec3* halo) override;
+  void bcast_positions(const Vec3* owned, Vec3* halo) override;
+  void bcast_field(const Vec3* owned, Vec3* halo, HaloField kind) override;
+  // Keeps every wall; records how far the mDBC ghost nodes reach across the plane.
+  std::vector<std::uint8_t> keep_walls(const Vec3* pos, const Vec3* ghost, Index n,
+                                       bool by_ghost) const override;
+  void build_wall_plan(const GlobalId*, const std::uint8_t*, Index) override {}
+  void wall_bcast(Real*) override {}
+  void wall_bcast(Vec3*) override {}
+  void wall_reduce(Real*) override {}
+  void wall_reduce(Vec3*) override {}
+  void sum(Real*, Index) override {}
+  void max(Real*, Index) override {}
+  std::int64_t sum(std::int64_t v) override { return v; }
+
+  const SymmetryPlane& plane() const { return plane_; }
+  // The halo width in use (grows with the walls' ghost nodes).
+  Real width() const;
+
+ private:
+  SymmetryPlane plane_;
+  Real width_, support_;
+  mutable Real ghost_reach_ = 0;  // deepest kept ghost node across the plane
+  std::vector<Index> source_;     // owned slot (at the build) of each mirror copy
+};
+
+}  // namespace sphdem
