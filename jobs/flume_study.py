@@ -18,6 +18,11 @@ every case on one axis) and OUT/profiles.png (centreline surface at the profile 
       [--presets P00 P30 P45 V30 V45] [--sphdem build/sphdem]
       [--set sph.dp=0.01 --set time.end=1.2 ...] [--summarize-only]
 
+--symmetry models half of each case that is symmetric about the centre line y = 0.2 (P00 and
+the case without boulders; the V layouts as built are not symmetric, and grains are not
+mirrored): `symmetry: {axis: y, at: 0.2}`, whose diagnostics are the full scene's
+(docs/VALIDATION.md, "Symmetry plane").
+
 Each run goes to OUT/<case>/ and is skipped if OUT/<case>/summary.json says it completed (so an
 interrupted study continues). Extra --set options apply to every case.
 """
@@ -35,6 +40,7 @@ SCENE = os.path.join(ROOT, "inputs", "flume", "flume.yaml")
 BOULDERS = os.path.join(ROOT, "inputs", "flume", "flume_boulders.yaml")
 # The seed's solid volume fractions (§5.3) as bead counts: fraction x 3.46 L / (pi 0.016^3 / 6).
 FRACTIONS = [("0", 0), ("0.167%", 3), ("0.334%", 5), ("0.822%", 13), ("1.176%", 19)]
+SYMMETRY = "symmetry={axis: y, at: 0.2}"
 IRREGULAR = ("dem.shapes[0]={name: bead, type: polyhedron, diameter: 0.016, planes: 12, "
              "variants: 8, seed: 3}")
 
@@ -124,11 +130,17 @@ def main():
     ap.add_argument("--sphdem", default=os.path.join(ROOT, "build", "sphdem"))
     ap.add_argument("--set", dest="sets", action="append", default=[])
     ap.add_argument("--summarize-only", action="store_true")
+    ap.add_argument("--symmetry", action="store_true",
+                    help="model half of the cases symmetric about y = 0.2 (P00, no boulders)")
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
     results = []
     for p, scene, case_sets in cases(a.study, a.presets):
         run_dir = os.path.join(a.out, p)
+        symmetric = scene == SCENE and (p in ("P00", "beads_0"))
+        if a.symmetry and symmetric:
+            case_sets = case_sets + [SYMMETRY]
+            print("case %s: half of it, mirrored about y = 0.2" % p, flush=True)
         if not a.summarize_only and not finished(run_dir):
             cmd = [a.sphdem, "run", scene, "--out", run_dir]
             for s in case_sets + a.sets:
