@@ -223,9 +223,11 @@ std::vector<std::string> profile_columns(const ProfileSpec& p) {
 // Diagnostics of a run: one CSV per named diagnostic.
 class DiagnosticWriter {
  public:
-  // append: a restart continues the series already in `dir`.
+  // append: a restart continues the series already in `dir`, from keep_before (the checkpoint's
+  // next output time; rows from then on were written after the checkpoint and are dropped).
   // enabled = false (ranks other than 0): no files; write() must not be called.
-  DiagnosticWriter(const Scene& s, const std::string& dir, bool append, bool enabled = true)
+  DiagnosticWriter(const Scene& s, const std::string& dir, bool append, bool enabled = true,
+                   double keep_before = INFINITY)
       : scene_(s), dir_(dir) {
     const Diagnostics& d = s.diagnostics;
     for (std::size_t i = 0; i < d.profiles.size(); ++i) profile_next_.push_back(0);
@@ -233,24 +235,25 @@ class DiagnosticWriter {
     using Cols = std::vector<std::string>;
     auto path = [&](const std::string& name) { return dir + "/" + name + ".csv"; };
     for (const auto& g : d.pressure_gauges)
-      pressure_.emplace_back(path(g.name), Cols{"t", "p"}, append);
+      pressure_.emplace_back(path(g.name), Cols{"t", "p"}, append, keep_before);
     for (const auto& g : d.height_gauges)
-      height_.emplace_back(path(g.name), Cols{"t", "h"}, append);
-    for (const auto& g : d.fronts) front_.emplace_back(path(g.name), Cols{"t", "x_front"}, append);
+      height_.emplace_back(path(g.name), Cols{"t", "h"}, append, keep_before);
+    for (const auto& g : d.fronts)
+      front_.emplace_back(path(g.name), Cols{"t", "x_front"}, append, keep_before);
     if (!d.velocity_gauges.empty()) {
       Cols c{"t"};
       for (const auto& g : d.velocity_gauges)
         for (const char* q : {"_u", "_depth", "_froude"}) c.push_back(g.name + q);
-      velocity_.open(path("velocity_gauges"), c, append);
+      velocity_.open(path("velocity_gauges"), c, append, keep_before);
     }
     for (const auto& g : d.forces)
-      force_.emplace_back(path(g.name), Cols{"t", "fx", "fy", "fz"}, append);
+      force_.emplace_back(path(g.name), Cols{"t", "fx", "fy", "fz"}, append, keep_before);
     for (const auto& g : d.profiles) {
-      profile_.emplace_back(path(g.name), profile_columns(g), append);
+      profile_.emplace_back(path(g.name), profile_columns(g), append, keep_before);
     }
     if (d.energy)
-      energy_.open(path("energy"), {"t", "kinetic", "potential", "total", "px", "py", "pz"},
-                   append);
+      energy_.open(path("energy"), {"t", "kinetic", "potential", "total", "px", "py", "pz"}, append,
+                   keep_before);
     if (s.barrier.enabled) {
       Cols c{"t"};
       for (int k = 1; k <= s.barrier.walls; ++k) {
@@ -259,12 +262,12 @@ class DiagnosticWriter {
       }
       c.push_back("total_fx");
       c.push_back("total_f");
-      impact_.open(path("impact_force"), c, append);
-      runup_.open(path("runup"), {"t", "runup", "x", "y"}, append);
+      impact_.open(path("impact_force"), c, append, keep_before);
+      runup_.open(path("runup"), {"t", "runup", "x", "y"}, append, keep_before);
       trap_.open(path("trap"),
                  {"t", "fluid_mass_upstream", "fluid_mass_downstream", "grains_upstream",
                   "grains_downstream"},
-                 append);
+                 append, keep_before);
     }
   }
   std::vector<std::int64_t> profile_state() const {
@@ -515,7 +518,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
   r.wall = rep.wall;
   r.grain = rep.grain;
   r.space = solver->space_name();
-  DiagnosticWriter diag(scene, opt.out_dir, restarting, root);
+  DiagnosticWriter diag(scene, opt.out_dir, restarting, root, restarting ? next_diag : INFINITY);
   diag.set_profile_state(profile_state);
   std::unique_ptr<std::ofstream> bodies_csv;
   if (coupling && root) {  // the DEM is replicated on every rank: rank 0 writes it

@@ -1,7 +1,10 @@
 // CSV time series in the output folder: one file per diagnostic, a header row, then rows.
 #pragma once
 
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -12,8 +15,9 @@ namespace sphdem {
 class CsvSeries {
  public:
   CsvSeries() = default;
-  CsvSeries(const std::string& path, const std::vector<std::string>& columns, bool append = false) {
-    open(path, columns, append);
+  CsvSeries(const std::string& path, const std::vector<std::string>& columns, bool append = false,
+            double keep_before = INFINITY) {
+    open(path, columns, append, keep_before);
   }
   CsvSeries(const CsvSeries&) = delete;
   CsvSeries& operator=(const CsvSeries&) = delete;
@@ -23,8 +27,12 @@ class CsvSeries {
   }
 
   // append: continue an existing series (restart); the header is written only to a new file.
-  void open(const std::string& path, const std::vector<std::string>& columns, bool append = false) {
+  // Rows from t = keep_before on (written after the checkpoint a restart starts from) are dropped
+  // first, so a restarted run does not repeat them.
+  void open(const std::string& path, const std::vector<std::string>& columns, bool append = false,
+            double keep_before = INFINITY) {
     bool fresh = true;
+    if (append && std::isfinite(keep_before)) trim(path, keep_before);
     if (append) {
       if (std::FILE* probe = std::fopen(path.c_str(), "r")) {
         fresh = std::fgetc(probe) == EOF;
@@ -46,6 +54,24 @@ class CsvSeries {
     std::fflush(f_);
   }
   const std::string& path() const { return path_; }
+
+  // Keeps the header and the rows whose first value is below t (a file that is not there stays
+  // so).
+  static void trim(const std::string& path, double t) {
+    std::ifstream in(path);
+    if (!in) return;
+    std::string line, kept;
+    bool header = true;
+    while (std::getline(in, line)) {
+      if (header || std::strtod(line.c_str(), nullptr) < t) kept += line + "\n";
+      header = false;
+    }
+    in.close();
+    std::FILE* out = std::fopen(path.c_str(), "w");
+    if (!out) throw InputError("cannot write output file '" + path + "'");
+    std::fputs(kept.c_str(), out);
+    std::fclose(out);
+  }
 
  private:
   std::FILE* f_ = nullptr;
