@@ -14,6 +14,7 @@
 #include "dem/dem_system.hpp"
 #include "diagnostics/heap.hpp"
 #include "io/checkpoint.hpp"
+#include "io/csv_series.hpp"
 #include "io/frames.hpp"
 #include "run_common.hpp"
 #include "scene/build_dem.hpp"
@@ -158,6 +159,7 @@ RunResult run_granular(const Scene& scene, const RunOptions& opt) {
   r.grain = Index(sys.bodies().size());
   // grains.csv
   const std::string csv = opt.out_dir + "/grains.csv";
+  if (restarting) CsvSeries::trim(csv, double(sys.time()));  // rows after the checkpoint go first
   std::ofstream diag(csv, restarting ? std::ios::app : std::ios::trunc);
   if (!diag) throw InputError("cannot write '" + csv + "'");
   diag << std::setprecision(10);

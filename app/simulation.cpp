@@ -224,7 +224,7 @@ std::vector<std::string> profile_columns(const ProfileSpec& p) {
 class DiagnosticWriter {
  public:
   // append: a restart continues the series already in `dir`, from keep_before (the checkpoint's
-  // next output time; rows from then on were written after the checkpoint and are dropped).
+  // time; rows from then on were written after the checkpoint and are dropped).
   // enabled = false (ranks other than 0): no files; write() must not be called.
   DiagnosticWriter(const Scene& s, const std::string& dir, bool append, bool enabled = true,
                    double keep_before = INFINITY)
@@ -504,6 +504,11 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
       } catch (const InputError& e) {
         throw InputError(restart_file + ": " + e.what());
       }
+      // The fluid's loads of the checkpoint's step, for the first bodies.csv row.
+      for (std::size_t i = 0; i < dem.system->bodies().size(); ++i) {
+        grain_force.push_back(dem.system->external_force(i));
+        grain_torque.push_back(dem.system->external_torque(i));
+      }
     }
     if (ex) distribute_after_read(*ex, cp.particles);
     next_diag = cp.next_output_time;
@@ -518,10 +523,15 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
   r.wall = rep.wall;
   r.grain = rep.grain;
   r.space = solver->space_name();
-  DiagnosticWriter diag(scene, opt.out_dir, restarting, root, restarting ? next_diag : INFINITY);
+  // Rows at or after the checkpoint's time were written after it: a restart drops them. (Not
+  // next_diag: with diagnostics.every below the step it lags the time.)
+  const double keep_before = restarting ? double(solver->time()) : INFINITY;
+  DiagnosticWriter diag(scene, opt.out_dir, restarting, root, keep_before);
   diag.set_profile_state(profile_state);
   std::unique_ptr<std::ofstream> bodies_csv;
   if (coupling && root) {  // the DEM is replicated on every rank: rank 0 writes it
+    // A restart drops the rows written after its checkpoint (a killed run's last rows) first.
+    if (restarting) CsvSeries::trim(opt.out_dir + "/bodies.csv", keep_before);
     bodies_csv = std::make_unique<std::ofstream>(opt.out_dir + "/bodies.csv",
                                                  restarting ? std::ios::app : std::ios::trunc);
     *bodies_csv << std::setprecision(10);

@@ -112,6 +112,9 @@ std::uint64_t fnv(std::uint64_t h, const void* p, std::size_t n) {
 // The DEM state as flat arrays, in a fixed order (write, read and checksum share it).
 struct DemArrays {
   std::vector<Vec3> x, v, w, inertia, acc_prev, alpha_prev, wall_point, wall_offset, springs;
+  // Optional (not in checkpoints before 2026-12-02): the last loads and the pair build.
+  std::vector<Vec3> ext_force, ext_torque, pairs_built_at;
+  std::vector<std::int32_t> pairs_built_motion;
   std::vector<Real> q, mass;  // q: 4 per body (w, x, y, z)
   std::vector<std::int32_t> motion, shape, node;
   std::vector<std::uint64_t> id, master, slave;
@@ -122,6 +125,12 @@ struct DemArrays {
     f("alpha_prev", alpha_prev), f("wall_point", wall_point), f("wall_offset", wall_offset);
     f("springs", springs), f("q", q), f("mass", mass), f("motion", motion), f("shape", shape);
     f("node", node), f("id", id), f("master", master), f("slave", slave);
+    f("ext_force", ext_force), f("ext_torque", ext_torque), f("pairs_built_at", pairs_built_at);
+    f("pairs_built_motion", pairs_built_motion);
+  }
+  static bool optional(const std::string& name) {
+    return name == "ext_force" || name == "ext_torque" || name == "pairs_built_at" ||
+           name == "pairs_built_motion";
   }
   std::uint64_t checksum() {
     std::uint64_t h = 1469598103934665603ULL;
@@ -148,6 +157,10 @@ DemArrays flatten(const dem::DemState& s) {
   a.wall_point = s.wall_point;
   a.wall_offset = s.wall_offset;
   a.springs = s.springs;
+  a.ext_force = s.ext_force;
+  a.ext_torque = s.ext_torque;
+  a.pairs_built_at = s.pairs_built_at;
+  a.pairs_built_motion = s.pairs_built_motion;
   for (const dem::ContactKey& k : s.keys) {
     a.master.push_back(k.master);
     a.slave.push_back(k.slave);
@@ -177,6 +190,10 @@ dem::DemState unflatten(const DemArrays& a, Real time) {
   s.wall_point = a.wall_point;
   s.wall_offset = a.wall_offset;
   s.springs = a.springs;
+  s.ext_force = a.ext_force;
+  s.ext_torque = a.ext_torque;
+  s.pairs_built_at = a.pairs_built_at;
+  s.pairs_built_motion = a.pairs_built_motion;
   for (std::size_t i = 0; i < a.master.size(); ++i)
     s.keys.push_back(dem::ContactKey{a.master[i], a.slave[i], std::uint32_t(a.node[i])});
   return s;
@@ -205,8 +222,10 @@ dem::DemState read_dem(hid_t f, const std::string& path, const std::string& lab)
     time = h5::read_attr<double>(grp, "time", H5T_NATIVE_DOUBLE, lab);
     sum = h5::read_attr<std::uint64_t>(grp, "checksum", H5T_NATIVE_UINT64, lab);
     a.each([&](const char* name, auto& v) {
-      if (H5Lexists(grp, name, H5P_DEFAULT) <= 0)
+      if (H5Lexists(grp, name, H5P_DEFAULT) <= 0) {
+        if (DemArrays::optional(name)) return;
         h5::fail(lab, std::string("dem/") + name + " is missing");
+      }
       hid_t ds = H5Dopen2(grp, name, H5P_DEFAULT);
       hid_t sp = H5Dget_space(ds);
       hsize_t dims[2] = {0, 0};

@@ -56,14 +56,15 @@ class CsvSeries {
   const std::string& path() const { return path_; }
 
   // Keeps the header and the rows whose first value is below t (a file that is not there stays
-  // so).
+  // so). A row printed at t itself (10 digits) may read back a little below it: it is dropped.
   static void trim(const std::string& path, double t) {
     std::ifstream in(path);
     if (!in) return;
     std::string line, kept;
     bool header = true;
     while (std::getline(in, line)) {
-      if (header || std::strtod(line.c_str(), nullptr) < t) kept += line + "\n";
+      if (header || std::strtod(line.c_str(), nullptr) < t - 1e-9 * std::fabs(t))
+        kept += line + "\n";
       header = false;
     }
     in.close();

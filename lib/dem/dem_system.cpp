@@ -647,6 +647,10 @@ DemState DemSystem::state() const {
     s.wall_offset.push_back(w.offset);
   }
   merged_history(s.keys, s.springs);
+  s.ext_force = ext_force_;
+  s.ext_torque = ext_torque_;
+  s.pairs_built_at = pairs_built_at_;
+  for (Motion m : pairs_built_motion_) s.pairs_built_motion.push_back(std::int32_t(m));
   return s;
 }
 
@@ -670,6 +674,20 @@ void DemSystem::restore(const DemState& s) {
   }
   hist_keys_ = s.keys;
   hist_springs_ = s.springs;
+  const bool kept = s.ext_force.size() == bodies_.size() && s.ext_torque.size() == bodies_.size();
+  ext_force_ = kept ? s.ext_force : std::vector<Vec3>(bodies_.size());
+  ext_torque_ = kept ? s.ext_torque : std::vector<Vec3>(bodies_.size());
+  if (s.pairs_built_at.size() == bodies_.size() && s.pairs_built_motion.size() == bodies_.size() &&
+      !bodies_.empty()) {
+    // The list as it was built: from the bodies where they were then, then back to now.
+    std::vector<RigidBody> now = bodies_;
+    for (std::size_t i = 0; i < bodies_.size(); ++i) {
+      bodies_[i].x = s.pairs_built_at[i];
+      bodies_[i].motion = Motion(s.pairs_built_motion[i]);
+    }
+    find_pairs();
+    bodies_ = std::move(now);
+  }
 }
 
 Real DemSystem::time_step() const {

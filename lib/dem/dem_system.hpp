@@ -97,6 +97,15 @@ struct DemState {
   std::vector<Vec3> wall_point, wall_offset;
   std::vector<ContactKey> keys;
   std::vector<Vec3> springs;
+  // The external loads (the fluid's force and torque in a coupled run) of the last step. The next
+  // step sets its own before it uses them: a restart needs them only to report them (bodies.csv).
+  // Empty in a checkpoint written before they were kept: restored as zero.
+  std::vector<Vec3> ext_force, ext_torque;
+  // Centroids and motion flags at the last pair-list build: a restart rebuilds the same list
+  // (the same broad-phase pairs and rebuild schedule). Empty in older checkpoints: the list is
+  // then rebuilt from the restored positions.
+  std::vector<Vec3> pairs_built_at;
+  std::vector<std::int32_t> pairs_built_motion;
 };
 
 class DemSystem {
@@ -124,6 +133,8 @@ class DemSystem {
 
   // External force and torque (world frame, about the centroid) added at every step until reset.
   void set_external(std::size_t body, Vec3 force, Vec3 torque);
+  Vec3 external_force(std::size_t body) const { return ext_force_.at(body); }
+  Vec3 external_torque(std::size_t body) const { return ext_torque_.at(body); }
 
   // Contact forces and torques at the current state; advances the tangential springs by dt.
   void compute_forces(Real dt);
