@@ -29,15 +29,7 @@ const std::string kScene = std::string(SPHDEM_SOURCE_DIR) + "/inputs/floating_bo
 
 RunResult run(const std::vector<std::string>& overrides, const std::string& out,
               std::int64_t max_steps = -1, const std::string& restart = "") {
-  if (restart.empty()) fs::remove_all(out);
-  RunOptions o;
-  o.out_dir = out;
-  o.backend = Backend::kHost;
-  o.quiet = true;
-  o.handle_signals = false;
-  o.max_steps = max_steps;
-  o.restart = restart;
-  return run_scene(load_scene(kScene, overrides), o);
+  return runfiles::run_host(load_scene(kScene, overrides), out, max_steps, restart);
 }
 
 struct Window {
@@ -217,13 +209,7 @@ TEST(Coupling, RestartContinuesBitIdentically) {
 TEST(Coupling, SubcyclingMatchesOneStepForLessCost) {
   const std::string scene = std::string(SPHDEM_SOURCE_DIR) + "/inputs/beads_settling.yaml";
   auto go = [&](const char* out, const char* subcycle) {
-    fs::remove_all(out);
-    RunOptions o;
-    o.out_dir = out;
-    o.backend = Backend::kHost;
-    o.quiet = true;
-    o.handle_signals = false;
-    return run_scene(load_scene(scene, {"time.end=0.1", subcycle}), o);
+    return runfiles::run_host(load_scene(scene, {"time.end=0.1", subcycle}), out);
   };
   const RunResult sub = go("beads_subcycled", "dem.subcycle=true");
   const RunResult one = go("beads_one_step", "dem.subcycle=false");

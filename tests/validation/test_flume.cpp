@@ -13,6 +13,7 @@
 #include "app/simulation.hpp"
 #include "io/checkpoint.hpp"
 #include "io/scene_yaml.hpp"
+#include "validation/run_files.hpp"
 
 namespace sphdem {
 namespace {
@@ -46,14 +47,7 @@ Csv read_csv(const std::string& path) {
 }
 
 RunResult run(const Scene& scene, const std::string& out, std::int64_t max_steps = -1) {
-  fs::remove_all(out);
-  RunOptions o;
-  o.out_dir = out;
-  o.backend = Backend::kHost;
-  o.quiet = true;
-  o.handle_signals = false;
-  o.max_steps = max_steps;
-  return run_scene(scene, o);
+  return runfiles::run_host(scene, out, max_steps);
 }
 
 // Still water held by a closed barrier: three walls, each as wide as the pitch, close a channel

@@ -41,14 +41,7 @@ Scene scene(const std::vector<std::string>& extra) {
 }
 
 RunResult run(const Scene& s, const std::string& out, const std::string& restart = "") {
-  if (restart.empty()) fs::remove_all(out);
-  RunOptions o;
-  o.out_dir = out;
-  o.backend = Backend::kHost;
-  o.quiet = true;
-  o.handle_signals = false;
-  o.restart = restart;
-  return run_scene(s, o);
+  return runfiles::run_host(s, out, -1, restart);
 }
 
 // front.csv as t -> x_front (t rounded to the 10 ms diagnostic grid).

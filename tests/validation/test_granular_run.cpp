@@ -13,6 +13,7 @@
 #include "core/error.hpp"
 #include "io/checkpoint.hpp"
 #include "io/scene_yaml.hpp"
+#include "validation/run_files.hpp"
 
 namespace sphdem {
 namespace {
@@ -51,15 +52,7 @@ std::string write_scene(const std::string& name, const std::string& text) {
 
 RunResult run(const Scene& s, const std::string& out, std::int64_t steps = -1,
               const std::string& restart = "") {
-  fs::create_directories(out);
-  RunOptions o;
-  o.out_dir = out;
-  o.backend = Backend::kHost;
-  o.quiet = true;
-  o.max_steps = steps;
-  o.restart = restart;
-  o.handle_signals = false;
-  return run_scene(s, o);
+  return runfiles::run_host(s, out, steps, restart);
 }
 
 std::vector<std::string> lines(const std::string& path) {

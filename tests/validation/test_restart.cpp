@@ -33,14 +33,7 @@ Scene small_scene(std::vector<std::string> extra = {}) {
 
 RunResult run(const Scene& s, const std::string& out, std::int64_t steps,
               const std::string& restart = "") {
-  RunOptions o;
-  o.out_dir = out;
-  o.backend = Backend::kHost;
-  o.quiet = true;
-  o.max_steps = steps;
-  o.restart = restart;
-  o.handle_signals = false;
-  return run_scene(s, o);
+  return runfiles::run_host(s, out, steps, restart);
 }
 
 TEST(Restart, ContinuesBitIdentically) {

@@ -44,14 +44,8 @@ const Settling& settling() {
   static const Settling s = [] {
     Settling out;
     const std::string dir = "settling_sphere";
-    fs::remove_all(dir);
     const Scene scene = load_scene(kScene);
-    RunOptions o;
-    o.out_dir = dir;
-    o.backend = Backend::kHost;
-    o.quiet = true;
-    o.handle_signals = false;
-    const RunResult r = run_scene(scene, o);
+    const RunResult r = runfiles::run_host(scene, dir);
     out.unstable = r.unstable;
     out.failure = r.failure;
     if (r.unstable) return out;

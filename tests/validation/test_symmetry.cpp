@@ -29,13 +29,7 @@ using runfiles::read_numeric_csv;
 const std::string kPillar = std::string(SPHDEM_TEST_DATA) + "/pillar_3d.yaml";
 
 RunResult run(const Scene& s, const std::string& out) {
-  fs::remove_all(out);
-  RunOptions o;
-  o.out_dir = out;
-  o.backend = Backend::kHost;
-  o.quiet = true;
-  o.handle_signals = false;
-  return run_scene(s, o);
+  return runfiles::run_host(s, out);
 }
 
 // Largest difference of column c between two runs' rows, over the larger column magnitude.
@@ -117,13 +111,7 @@ TEST(Symmetry, HalfRunRestartsBitIdentically) {
   // checkpoint. The restart drops those and writes them again, so the files end as run A's.
   fs::copy_file("symmetry_restart_a/energy.csv", "symmetry_restart_b/energy.csv");
   fs::copy_file("symmetry_restart_a/pillar_force.csv", "symmetry_restart_b/pillar_force.csv");
-  RunOptions o;
-  o.out_dir = "symmetry_restart_b";
-  o.backend = Backend::kHost;
-  o.quiet = true;
-  o.handle_signals = false;
-  o.restart = first;
-  const RunResult b = run_scene(half, o);
+  const RunResult b = runfiles::run_host(half, "symmetry_restart_b", -1, first);
   ASSERT_FALSE(b.unstable) << b.failure;
   const std::string last = "symmetry_restart_b/" + fs::path(cps[1]).filename().string();
   ASSERT_TRUE(fs::exists(last));
