@@ -6,6 +6,7 @@
 
 #include "core/error.hpp"
 #include "scene/barrier.hpp"
+#include "solver/mirror_exchange.hpp"
 
 namespace sphdem {
 
@@ -59,15 +60,7 @@ ParticleSet<Host> mirror_full(const ParticleSet<Host>& ps, const SymmetryPlane& 
   src.for_each_field([&](const char* name, auto& b) {
     auto& v = static_cast<std::decay_t<decltype(b)>*>(outs[k++])->vec();
     using T = std::decay_t<decltype(v[0])>;
-    auto image = [&](T x) {
-      if constexpr (std::is_same_v<T, Vec3>) {
-        const bool point = !std::strcmp(name, "pos") || !std::strcmp(name, "ghost") ||
-                           !std::strcmp(name, "ghost_alt");
-        return point ? plane.reflect_point(x) : plane.reflect_vector(x);
-      } else {
-        return x;
-      }
-    };
+    auto image = [&](const T& x) { return mirror_field_value(plane, name, x); };
     v.reserve(std::size_t(2 * (nf + nw)));
     for (Index i = 0; i < nf; ++i) v.push_back(b[std::size_t(i)]);
     for (Index i = 0; i < nf; ++i) v.push_back(image(b[std::size_t(i)]));

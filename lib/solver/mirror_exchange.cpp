@@ -41,15 +41,8 @@ void MirrorExchange::build_halo(ParticleSet<Host>& ps) {
     std::vector<T> out;
     out.reserve(std::size_t(n + nh));
     out.insert(out.end(), v.begin(), v.begin() + nf);
-    for (Index j = 0; j < nh; ++j) {
-      T x = v[std::size_t(source_[std::size_t(j)])];
-      if constexpr (std::is_same_v<T, Vec3>) {
-        const bool point = !std::strcmp(name, "pos") || !std::strcmp(name, "ghost") ||
-                           !std::strcmp(name, "ghost_alt");
-        x = point ? plane_.reflect_point(x) : plane_.reflect_vector(x);
-      }
-      out.push_back(x);
-    }
+    for (Index j = 0; j < nh; ++j)
+      out.push_back(mirror_field_value(plane_, name, v[std::size_t(source_[std::size_t(j)])]));
     out.insert(out.end(), v.begin() + nf, v.begin() + n);
     v.swap(out);
   });

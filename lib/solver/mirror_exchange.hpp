@@ -10,12 +10,28 @@
 // interpolates its state from mirror fluid around its ghost node).
 #pragma once
 
+#include <cstring>
+#include <type_traits>
 #include <vector>
 
 #include "core/symmetry.hpp"
 #include "solver/exchange.hpp"
 
 namespace sphdem {
+
+// The mirror image of one value of the ParticleSet field `name` (for_each_field's names): the
+// point fields (pos, ghost, ghost_alt) reflect as points, the other Vec3 fields as vectors, and
+// scalars are copied.
+template <class T>
+T mirror_field_value(const SymmetryPlane& plane, const char* name, const T& x) {
+  if constexpr (std::is_same_v<T, Vec3>) {
+    const bool point =
+        !std::strcmp(name, "pos") || !std::strcmp(name, "ghost") || !std::strcmp(name, "ghost_alt");
+    return point ? plane.reflect_point(x) : plane.reflect_vector(x);
+  } else {
+    return x;
+  }
+}
 
 class MirrorExchange final : public Exchange {
  public:
