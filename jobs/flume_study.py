@@ -94,9 +94,10 @@ def running_mean(t, f, window):
     return out
 
 
-def summarize(run_dir):
-    """Numbers of one case from its CSV files."""
+def summarize(run_dir, until=float("inf")):
+    """Numbers of one case from its CSV files (rows up to t = until)."""
     h, rows = read_csv(os.path.join(run_dir, "impact_force.csv"))
+    rows = [r for r in rows if r[0] <= until]
     walls = sum(1 for c in h if c.endswith("_fx") and c.startswith("barrier_"))
     mid = h.index("barrier_%d_fx" % ((walls + 1) // 2))
     t = [r[0] for r in rows]
@@ -110,14 +111,17 @@ def summarize(run_dir):
     # Static force: mean over the last 10 % of the run.
     tail = [f for ti, f in zip(t, f_mid) if ti >= t[-1] - 0.1 * (t[-1] - t[0])] if rows else []
     _, ru = read_csv(os.path.join(run_dir, "runup.csv"))
+    ru = [r for r in ru if r[0] <= until]
     trap = os.path.join(run_dir, "trap.csv")
     _, tr = read_csv(trap) if os.path.exists(trap) else ([], [])
+    tr = [r for r in tr if r[0] <= until]
     up, down = (tr[-1][1], tr[-1][2]) if tr else (0.0, 0.0)
     # Front speed: the largest over 0.05 s windows of front.csv (its rows are every diagnostics.every).
     speed = 0.0
     fpath = os.path.join(run_dir, "front.csv")
     if os.path.exists(fpath):
         _, fr = read_csv(fpath)
+        fr = [r for r in fr if r[0] <= until]
         j = 0
         for i in range(len(fr)):
             while fr[i][0] - fr[j][0] > 0.05:
