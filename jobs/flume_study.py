@@ -17,7 +17,7 @@ every case on one axis) and OUT/profiles.png (centreline surface at the profile 
 
   python3 jobs/flume_study.py --out runs/flume_study [--study arrangement]
       [--presets P00 P30 P45 V30 V45] [--sphdem build/sphdem]
-      [--set sph.dp=0.01 --set time.end=1.2 ...] [--summarize-only]
+      [--set sph.dp=0.01 --set time.end=1.2 ...] [--summarize-only] [--until T]
 
 --symmetry models half of each case that is symmetric about the centre line y = 0.2 (P00 and
 the case without boulders; the V layouts as built are not symmetric, and grains are not
@@ -156,6 +156,8 @@ def main():
     ap.add_argument("--sphdem", default=os.path.join(ROOT, "build", "sphdem"))
     ap.add_argument("--set", dest="sets", action="append", default=[])
     ap.add_argument("--summarize-only", action="store_true")
+    ap.add_argument("--until", type=float, default=float("inf"),
+                    help="summarize rows up to this time only (compare cases that ended early)")
     ap.add_argument("--symmetry", action="store_true",
                     help="model half of the cases symmetric about y = 0.2 (P00, no boulders)")
     a = ap.parse_args()
@@ -177,7 +179,7 @@ def main():
                 print("case %s stopped (exit %d): see %s/run.log" % (p, rc, run_dir), flush=True)
         if not os.path.exists(os.path.join(run_dir, "impact_force.csv")):
             continue
-        r = summarize(run_dir)
+        r = summarize(run_dir, a.until)
         r["preset"] = p
         r["opening_ratio"] = opening_ratio(a.sphdem, scene, case_sets, a.sets)
         r["finished"] = finished(run_dir)
