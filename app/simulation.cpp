@@ -834,10 +834,17 @@ void check_scene(const Scene& scene, std::ostream& os) {
   // Rough cost from the CPU figures in docs/BENCHMARKS.md: in 3D, double precision, a thread
   // does about 1.3e7 (fluid particle x neighbour)-steps/s for the whole step (the dam break at
   // 291 neighbours: 5.5e4 particle-steps/s; the flume at 173: 7e4), the neighbours being the
-  // lattice sites within 2h; 2D runs go faster.
+  // lattice sites within 2h; 2D runs go faster. mDBC adds a ghost-node gather per boundary
+  // particle, near fluid or not: about 1 us per particle-step in 3D (0.7-1.2 us measured: the
+  // 3D dam break at 25k, and the flume's half scene at dp = 5 mm, 107k walls, where it was a
+  // quarter of the step).
   const double kh = double(2 * p.h / p.dp);
   const double per_thread = scene.dim == 3 ? 1.3e7 / (4.18879 * kh * kh * kh) : 2.5e5;
-  const double cost = double(rep.fluid) * steps / (per_thread * host_thread_count());
+  const double gathers = scene.sph.boundary == BoundaryMethod::kMdbc && scene.dim == 3
+                             ? double(rep.wall + rep.grain) * 1e-6
+                             : 0.0;
+  const double cost =
+      (double(rep.fluid) / per_thread + gathers) * steps / double(host_thread_count());
   os << "scene '" << scene.name << "' (" << scene.source << "), " << scene.dim << "D\n"
      << grains.str() << "particles: fluid " << rep.fluid << ", wall boundary " << rep.wall
      << ", grain boundary " << rep.grain << ", total " << ps.size() << "\n";
