@@ -73,16 +73,7 @@ def main():
     cols = ["dp", "fluid", "boundary", "wall_s", "first_contact", "peak_mid_50ms",
             "t_peak_mid_50ms", "peak_total_50ms", "max_runup", "trap_ratio"] + \
         ["diff_" + k for k in keys]
-    with open(a.out + ".csv", "w") as f:
-        f.write(",".join(cols) + "\n")
-        for r in rows:
-            f.write(",".join(repr(r[c]) for c in cols) + "\n")
-    with open(a.out + ".md", "w") as f:
-        f.write("| " + " | ".join(cols) + " |\n|" + "---|" * len(cols) + "\n")
-        for r in rows:
-            f.write("| " + " | ".join("%.4g" % r[c] if isinstance(r[c], float) else str(r[c])
-                                      for c in cols) + " |\n")
-    print(open(a.out + ".md").read())
+    flume_study.write_table(a.out, cols, rows, repr)
     try:
         import matplotlib
         matplotlib.use("Agg")

@@ -82,6 +82,20 @@ def finished(run_dir):
         return False
 
 
+def write_table(base, cols, rows, fmt=str):
+    """BASE.csv (values as fmt gives them) and BASE.md (floats to 4 digits); prints the table."""
+    with open(base + ".csv", "w") as f:
+        f.write(",".join(cols) + "\n")
+        for r in rows:
+            f.write(",".join(fmt(r[c]) for c in cols) + "\n")
+    with open(base + ".md", "w") as f:
+        f.write("| " + " | ".join(cols) + " |\n|" + "---|" * len(cols) + "\n")
+        for r in rows:
+            f.write("| " + " | ".join(
+                "%.4g" % r[c] if isinstance(r[c], float) else str(r[c]) for c in cols) + " |\n")
+    print(open(base + ".md").read())
+
+
 def running_mean(t, f, window):
     """Mean of f over the trailing window (s) ending at each sample."""
     out, j, acc = [], 0, 0.0
@@ -187,17 +201,7 @@ def main():
     cols = ["preset", "opening_ratio", "peak_force_mid", "t_peak", "peak_mid_50ms", "t_peak_50ms",
             "peak_total_50ms", "static_force_mid",
             "max_runup", "trap_ratio", "grains_upstream", "front_speed", "t_end", "finished"]
-    with open(os.path.join(a.out, "summary.csv"), "w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow(cols)
-        for r in results:
-            w.writerow([r[c] for c in cols])
-    with open(os.path.join(a.out, "summary.md"), "w") as f:
-        f.write("| " + " | ".join(cols) + " |\n|" + "---|" * len(cols) + "\n")
-        for r in results:
-            f.write("| " + " | ".join(
-                "%.4g" % r[c] if isinstance(r[c], float) else str(r[c]) for c in cols) + " |\n")
-    print(open(os.path.join(a.out, "summary.md")).read())
+    write_table(os.path.join(a.out, "summary"), cols, results)
     try:
         import matplotlib
         matplotlib.use("Agg")

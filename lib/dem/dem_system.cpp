@@ -674,11 +674,16 @@ void DemSystem::restore(const DemState& s) {
   }
   hist_keys_ = s.keys;
   hist_springs_ = s.springs;
-  const bool kept = s.ext_force.size() == bodies_.size() && s.ext_torque.size() == bodies_.size();
+  // The optional arrays are either absent (an older checkpoint) or one entry per body.
+  for (std::size_t n : {s.ext_force.size(), s.ext_torque.size(), s.pairs_built_at.size(),
+                        s.pairs_built_motion.size()})
+    if (n != 0 && n != bodies_.size())
+      throw InputError("DEM state: an array of " + std::to_string(n) + " entries for " +
+                       std::to_string(bodies_.size()) + " bodies");
+  const bool kept = !s.ext_force.empty() && !s.ext_torque.empty();
   ext_force_ = kept ? s.ext_force : std::vector<Vec3>(bodies_.size());
   ext_torque_ = kept ? s.ext_torque : std::vector<Vec3>(bodies_.size());
-  if (s.pairs_built_at.size() == bodies_.size() && s.pairs_built_motion.size() == bodies_.size() &&
-      !bodies_.empty()) {
+  if (!s.pairs_built_at.empty() && !s.pairs_built_motion.empty()) {
     // The list as it was built: from the bodies where they were then, then back to now.
     std::vector<RigidBody> now = bodies_;
     for (std::size_t i = 0; i < bodies_.size(); ++i) {
