@@ -771,7 +771,8 @@ void Parser::parse_fluid(const Field& f) {
 
 void Parser::parse_sph(const Field& f) {
   SphParams& p = scene_->sph;
-  MapReader m = map(f, {"dp", "h_factor", "boundary", "slip", "boundary_layers", "no_penetration"});
+  MapReader m = map(
+      f, {"dp", "h_factor", "boundary", "slip", "boundary_layers", "no_penetration", "pairwise"});
   p.dp = m.number("dp", left_open(0, 1));
   p.h_factor = m.number("h_factor", closed(0.5, 3), p.h_factor);
   p.boundary = m.enumeration("boundary", kBoundaryMethods, p.boundary);
@@ -782,6 +783,7 @@ void Parser::parse_sph(const Field& f) {
          "the penetration control is part of mDBC (boundary: mdbc); DBC walls resist approach "
          "through their own density");
   p.boundary_layers = m.integer("boundary_layers", 0, 20, p.boundary_layers);
+  p.pairwise = m.boolean("pairwise", p.pairwise);
 }
 
 void Parser::parse_time(const Field& f) {

@@ -20,3 +20,12 @@
 #else
 #define SPHDEM_INLINE inline
 #endif
+
+// SPHDEM_FLATTEN inlines every call inside a neighbour loop, the caller's pair lambda included
+// (g++ keeps a large lambda out of line and reloads its captures through memory at each pair).
+// nvcc inlines device lambdas on its own.
+#if !defined(__CUDACC__) && defined(__GNUC__) && !defined(__clang__)
+#define SPHDEM_FLATTEN __attribute__((flatten))
+#else
+#define SPHDEM_FLATTEN
+#endif

@@ -121,9 +121,15 @@ SPHDEM_HD inline bool window_occupied(const CellGrid& g, const std::uint8_t* occ
 // (the particle itself included when it is in the list: the caller skips j == i when needed).
 // The visiting order is fixed: cells by (dz, dy, dx), then slots in sorted (cell, id) order, so
 // sums over neighbours are reproducible.
+//
+// for_each_neighbor_from visits only slots >= `first`: from slot i with first = i + 1 it visits
+// each pair of the list once (the pairwise fluid pass, solver/pairwise_host.cpp). Rows of cells
+// wholly below `first` cost two loads.
 template <class F>
-SPHDEM_HD inline void for_each_neighbor(const CellGrid& g, const CellListView& cl, const Vec3* pos,
-                                        const Vec3& xi, Real radius2, F&& f) {
+SPHDEM_HD SPHDEM_FLATTEN inline void for_each_neighbor_from(const CellGrid& g,
+                                                            const CellListView& cl, const Vec3* pos,
+                                                            const Vec3& xi, Real radius2,
+                                                            std::uint32_t first, F&& f) {
   const int r = g.reach;
   const int cx = g.coord(xi.x, 0);
   const int cy = g.dim == 2 ? 0 : g.coord(xi.y, 1);
@@ -133,8 +139,9 @@ SPHDEM_HD inline void for_each_neighbor(const CellGrid& g, const CellListView& c
   // The row of cells [x0, x1] along x is one contiguous slot range; a periodic row that wraps
   // splits into two.
   auto scan = [&](int x0, int x1, int y, int z) {
-    const std::uint32_t b = cl.start[g.key(x0, y, z)];
+    std::uint32_t b = cl.start[g.key(x0, y, z)];
     const std::uint32_t e = cl.start[g.key(x1, y, z) + 1];
+    if (b < first) b = first;
     for (std::uint32_t j = b; j < e; ++j) {
       const Vec3 rij = g.separation(xi, pos[j]);
       const Real r2 = norm2(rij);
@@ -173,6 +180,13 @@ SPHDEM_HD inline void for_each_neighbor(const CellGrid& g, const CellListView& c
       scan(x0, x1, y, z);
     }
   }
+}
+
+template <class F>
+SPHDEM_HD SPHDEM_FLATTEN inline void for_each_neighbor(const CellGrid& g, const CellListView& cl,
+                                                       const Vec3* pos, const Vec3& xi,
+                                                       Real radius2, F&& f) {
+  for_each_neighbor_from(g, cl, pos, xi, radius2, 0, f);
 }
 
 }  // namespace sphdem

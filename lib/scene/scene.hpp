@@ -67,6 +67,9 @@ struct SphParams {
   // mDBC penetration control (sph/mdbc.hpp, wall_pair_*): walls never pull fluid, and fluid
   // moving toward a wall sees the wall approach at the mirrored speed in the continuity equation.
   bool no_penetration = false;
+  // CPU: each pair of owned fluid particles is evaluated once for both (solver/pairwise_host.hpp;
+  // LAMMPS' `newton on`); false gathers every pair from both sides, as the GPU does.
+  bool pairwise = true;
 };
 
 struct TimeParams {

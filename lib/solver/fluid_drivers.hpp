@@ -135,23 +135,28 @@ void compute_viscous_state(Space s, ParticleView v, NeighborLists nl, StepParams
       });
 }
 
-// Accumulates, for particle i at r_i, the interaction with neighbour j. Shared by fluid and
-// boundary gathers so the pair physics exists once. `j_fluid` selects density diffusion (fluid
-// pairs only, as in DualSPHysics) and the velocity seen by the viscous term.
-struct PairSums {
+// The pair physics, shared by the fluid and boundary gathers and by the pairwise fluid pass
+// (solver/pairwise_host.cpp), so it exists once. Every term of the momentum and continuity sums
+// is the neighbour's mass times a factor of the pair; the factors are kept per unit mass so one
+// evaluation serves both particles of a fluid pair:
+//   a_i += m_j acc,  a_j -= m_i acc        (each momentum term is antisymmetric in i, j)
+//   drho_i += m_j drho_i,  drho_j += m_i drho_j
+// `j_fluid` selects density diffusion (fluid pairs only, as in DualSPHysics) and the velocity
+// seen by the viscous term. drho_j is filled only with `both` (fluid pairs): the Fourtakas
+// hydrostatic difference is not odd in the height, so the j side is evaluated on its own.
+struct PairCore {
   Vec3 acc;
-  Real drho = 0;
-  Real visc_rate = 0;  // max_j |h v_ij.r_ij/(r^2+eta^2)|
+  Real drho_i = 0, drho_j = 0;
+  Real rate = 0;  // |h v_ij.r_ij/(r^2+eta^2)|, the same from both sides
 };
 
-SPHDEM_HD SPHDEM_INLINE void accumulate_pair(const StepParams& p, const ParticleView& v, Index i,
-                                             Index j, const Vec3& r_ij, Real r2, bool i_fluid,
-                                             bool j_fluid, PairSums& out) {
-  if (r2 <= Real(0)) return;  // self
+SPHDEM_HD SPHDEM_INLINE PairCore pair_core(const StepParams& p, const ParticleView& v, Index i,
+                                           Index j, const Vec3& r_ij, Real r2, bool i_fluid,
+                                           bool j_fluid, bool both) {
+  PairCore c;
   const Real r = std::sqrt(r2);
   const Real f = kernel_f(p.kernel, r);
   const Real rho_i = v.rho[i], rho_j = v.rho[j];
-  const Real m_j = v.mass[j];
   // Continuity uses the solid's own velocity for boundary particles.
   Vec3 v_ij = v.vel[i] - v.vel[j];
   Real p_i = v.press[i], p_j = v.press[j];
@@ -163,14 +168,21 @@ SPHDEM_HD SPHDEM_INLINE void accumulate_pair(const StepParams& p, const Particle
       p_j = wall_pair_pressure(p_j);
     }
   }
-  out.drho += continuity_ij(m_j, v_ij, r_ij, f);
+  const Real cont = continuity_ij(Real(1), v_ij, r_ij, f);
+  c.drho_i = cont;
+  c.drho_j = cont;
   if (p.diffusion && i_fluid && j_fluid) {
     const Real height_ij = -dot(r_ij, p.g_hat);
     const Real d =
         diffusion_drho_ij(p.eos, rho_i, rho_j, p.diffusion_hydrostatic, p.g_mag, height_ij);
-    out.drho += diffusion_ij(p.delta_h_c0, d, f, m_j, rho_j);
+    c.drho_i += diffusion_ij(p.delta_h_c0, d, f, Real(1), rho_j);
+    if (both) {
+      const Real d_ji =
+          diffusion_drho_ij(p.eos, rho_j, rho_i, p.diffusion_hydrostatic, p.g_mag, -height_ij);
+      c.drho_j += diffusion_ij(p.delta_h_c0, d_ji, f, Real(1), rho_i);
+    }
   }
-  out.acc += pressure_acc_ij(m_j, p_i, rho_i, p_j, rho_j, r_ij, f);
+  c.acc = pressure_acc_ij(Real(1), p_i, rho_i, p_j, rho_j, r_ij, f);
   // Viscous term: a boundary neighbour contributes through its mDBC velocity.
   const Vec3 vi = i_fluid || !p.mdbc ? v.vel[i] : v.vel_bc[i];
   const Vec3 vj = j_fluid || !p.mdbc ? v.vel[j] : v.vel_bc[j];
@@ -183,21 +195,39 @@ SPHDEM_HD SPHDEM_INLINE void accumulate_pair(const StepParams& p, const Particle
     const Real mu_i = i_fluid ? v.visc[i] : v.visc[j];
     const Real mu_j = j_fluid ? v.visc[j] : mu_i;
     const Real mu_ij = Real(2) * mu_i * mu_j / (mu_i + mu_j);
-    out.acc +=
-        laminar_acc_ij(m_j, Real(2) * mu_ij / (rho_i + rho_j), rho_i, rho_j, r2, f, p.eta2, vv_ij);
+    c.acc += laminar_acc_ij(Real(1), Real(2) * mu_ij / (rho_i + rho_j), rho_i, rho_j, r2, f, p.eta2,
+                            vv_ij);
   } else if (p.laminar) {
-    out.acc += laminar_acc_ij(m_j, p.nu, rho_i, rho_j, r2, f, p.eta2, vv_ij);
+    c.acc += laminar_acc_ij(Real(1), p.nu, rho_i, rho_j, r2, f, p.eta2, vv_ij);
   } else {
     const Real c_mean = p.eos.c0;
-    out.acc +=
-        artificial_acc_ij(m_j, p.alpha, c_mean, p.h, rho_i, rho_j, r_ij, r2, f, p.eta2, vv_ij);
+    c.acc +=
+        artificial_acc_ij(Real(1), p.alpha, c_mean, p.h, rho_i, rho_j, r_ij, r2, f, p.eta2, vv_ij);
   }
   if (p.sps && i_fluid && j_fluid) {
     const SymTensor ti{v.sps_d[i], v.sps_o[i]}, tj{v.sps_d[j], v.sps_o[j]};
-    out.acc += sps_acc_ij(m_j, ti, rho_i, tj, rho_j, r_ij, f);
+    c.acc += sps_acc_ij(Real(1), ti, rho_i, tj, rho_j, r_ij, f);
   }
-  const Real rate = visc_dt_rate_ij(p.h, vv_ij, r_ij, r2, p.eta2);
-  if (rate > out.visc_rate) out.visc_rate = rate;
+  c.rate = visc_dt_rate_ij(p.h, vv_ij, r_ij, r2, p.eta2);
+  return c;
+}
+
+// Accumulates, for particle i at r_i, the interaction with neighbour j (a gather: i's side only).
+struct PairSums {
+  Vec3 acc;
+  Real drho = 0;
+  Real visc_rate = 0;  // max_j |h v_ij.r_ij/(r^2+eta^2)|
+};
+
+SPHDEM_HD SPHDEM_INLINE void accumulate_pair(const StepParams& p, const ParticleView& v, Index i,
+                                             Index j, const Vec3& r_ij, Real r2, bool i_fluid,
+                                             bool j_fluid, PairSums& out) {
+  if (r2 <= Real(0)) return;  // self
+  const PairCore c = pair_core(p, v, i, j, r_ij, r2, i_fluid, j_fluid, false);
+  const Real m_j = v.mass[j];
+  out.acc += c.acc * m_j;
+  out.drho += c.drho_i * m_j;
+  if (c.rate > out.visc_rate) out.visc_rate = c.rate;
 }
 
 // Rates of change for slots [begin, end): acceleration (with gravity for fluid), drho/dt, and

@@ -9,11 +9,13 @@
 #include <memory>
 #include <numeric>
 #include <sstream>
+#include <type_traits>
 
 #include "core/error.hpp"
 #include "neighbor/cell_list.hpp"
 #include "solver/exchange.hpp"
 #include "solver/fluid_drivers.hpp"
+#include "solver/pairwise_host.hpp"
 #include "solver/solver.hpp"
 
 namespace sphdem {
@@ -247,7 +249,12 @@ class Solver final : public SolverBase {
       }
     }
     auto t1 = tick();
-    compute_rates(Space{}, v, nl, p_, 0, ps_.n_fluid, true, rate_.data());
+    bool pairwise = false;  // the CPU evaluates each owned fluid pair once
+    if constexpr (std::is_same_v<Space, Host>) {
+      if (p_.pairwise)
+        pairwise = compute_fluid_rates_pairwise(v, nl, p_, ps_.n_fluid, rate_.data());
+    }
+    if (!pairwise) compute_rates(Space{}, v, nl, p_, 0, ps_.n_fluid, true, rate_.data());
     compute_rates(Space{}, v, nl, p_, ps_.wall_begin(), ps_.size(), false, rate_.data());
     if (ex_) {
       wall_sync(ps_.acc, true);  // the owner holds the whole fluid force on its wall particles

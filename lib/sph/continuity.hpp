@@ -32,17 +32,18 @@ SPHDEM_HD inline Real diffusion_drho_ij(const EosParams& e, Real rho_i, Real rho
                                         bool hydrostatic, Real g_mag, Real height_ij) {
   Real d = rho_j - rho_i;
   if (hydrostatic) {
-    // (1 + x)^(1/gamma) - 1 with x = rho0 g z_ij / B. Within a kernel support x is ~1e-4, where
-    // the series x/gamma (1 + (1/gamma - 1) x/2 + (1/gamma - 1)(1/gamma - 2) x^2/6) is exact to
-    // round-off (the next term is ~x^4) and avoids a pow per pair.
-    const Real x = e.rho0 * g_mag * height_ij / e.b;
-    const Real ig = Real(1) / e.gamma;
+    // (1 + x)^(1/gamma) - 1 with x = rho0 g z_ij / B. Within a kernel support |x| is ~1e-4 to
+    // 1e-2, where the binomial series (EosParams::series, Horner) is exact to round-off and
+    // avoids a pow per pair.
+    const Real x = e.rho0 * g_mag * height_ij * e.inv_b;
     Real frac;
-    if (x > Real(-1e-3) && x < Real(1e-3)) {
-      frac = ig * x * (Real(1) + (ig - Real(1)) * x * (Real(0.5) + (ig - Real(2)) * x / Real(6)));
+    if (x > Real(-EosParams::kSeriesRange) && x < Real(EosParams::kSeriesRange)) {
+      frac = e.series[EosParams::kSeriesTerms - 1];
+      for (int k = EosParams::kSeriesTerms - 2; k >= 0; --k) frac = e.series[k] + x * frac;
+      frac *= x;
     } else {
       const Real base = Real(1) + x;
-      frac = std::pow(base > Real(0) ? base : Real(0), ig) - Real(1);
+      frac = std::pow(base > Real(0) ? base : Real(0), Real(1) / e.gamma) - Real(1);
     }
     d -= e.rho0 * frac;
   }

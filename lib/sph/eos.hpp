@@ -21,11 +21,31 @@ struct EosParams {
   // below, the pressure no longer resists expansion, and a spreading film's density would drift
   // without bound (to the density guard) while carrying no force.
   Real rho_floor = 0;
+  // (1 + x)^(1/gamma) - 1 = sum_k series[k-1] x^k for k = 1..kSeriesTerms, the binomial series,
+  // which the Fourtakas diffusion sums instead of a pow per pair (sph/continuity.hpp). For
+  // |x| < kSeriesRange the first omitted term is below 1e-16 of the sum (gamma >= 1).
+  static constexpr int kSeriesTerms = 9;
+  static constexpr double kSeriesRange = 0.02;
+  Real series[kSeriesTerms] = {};
+  Real inv_b = 0;  // 1 / b
 };
 
 inline EosParams make_eos(Real rho0, Real c0, Real gamma, Real p_min = Real(-1e30)) {
-  EosParams e{rho0, c0, gamma, rho0 * c0 * c0 / gamma, p_min, 0};
+  EosParams e;
+  e.rho0 = rho0;
+  e.c0 = c0;
+  e.gamma = gamma;
+  e.b = rho0 * c0 * c0 / gamma;
+  e.p_min = p_min;
+  e.inv_b = Real(1) / e.b;
   if (p_min > -e.b) e.rho_floor = rho0 * std::pow(Real(1) + p_min / e.b, Real(1) / gamma);
+  // binom(a, k) = binom(a, k - 1) (a - k + 1) / k with a = 1/gamma.
+  const double a = 1.0 / double(gamma);
+  double c = 1;
+  for (int k = 1; k <= EosParams::kSeriesTerms; ++k) {
+    c *= (a - (k - 1)) / k;
+    e.series[k - 1] = Real(c);
+  }
   return e;
 }
 

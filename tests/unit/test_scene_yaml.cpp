@@ -72,7 +72,7 @@ const BadFile kBadFiles[] = {
      ":6: checkpoint.every_steps: value -5 is out of range; allowed [0, 2e9]"},
     {"unknown_nested_key.yaml",
      ":5: sph.dpp: unknown key; allowed keys: dp, h_factor, boundary, slip, boundary_layers, "
-     "no_penetration"},
+     "no_penetration, pairwise"},
     {"unknown_deep_key.yaml",
      ":8: fluid.viscosity.mu: unknown key; allowed keys: model, nu, alpha"},
     {"wrong_type_number.yaml", ":6: time.end: expected a number, got 'soon'"},
@@ -213,7 +213,7 @@ TEST(SceneYamlBadOverride, GivesExactMessage) {
        "laminar, artificial"},
       {{"sph={dpp: 1}"},
        "--set sph={dpp: 1}: sph.dpp: unknown key; allowed keys: dp, h_factor, boundary, slip, "
-       "boundary_layers, no_penetration"},
+       "boundary_layers, no_penetration, pairwise"},
       {{"domain={lo: [0, 0, 0]}"},
        "--set domain={lo: [0, 0, 0]}: domain.hi: required key is missing"},
       {{"diagnostics.forces[0].solid=tnk"},

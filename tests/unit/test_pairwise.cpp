@@ -1,0 +1,189 @@
+// The CPU's pairwise fluid pass (solver/pairwise_host.hpp) against the gather that the GPU runs:
+// the same rates to round-off on every kind of scene, and bit-identical results for any number
+// of threads.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+#include "app/simulation.hpp"
+#include "io/scene_yaml.hpp"
+#include "solver/pairwise_host.hpp"
+
+namespace sphdem {
+namespace {
+
+std::string input(const std::string& name) {
+  return std::string(SPHDEM_SOURCE_DIR) + "/inputs/" + name;
+}
+
+struct Rates {
+  std::map<GlobalId, Vec3> acc, pos;
+  std::map<GlobalId, Real> drho, rho;
+  double acc_scale = 0, drho_scale = 0;
+  double vmax = 0, rho0 = 0, dp = 0;
+};
+
+// Steps a solver and returns, by id, the rates of its last step and the state after it.
+Rates run(const std::string& file, std::vector<std::string> sets, bool pairwise, int steps) {
+  sets.push_back(std::string("sph.pairwise=") + (pairwise ? "true" : "false"));
+  const Scene scene = load_scene(input(file), sets);
+  std::ostringstream log;
+  auto solver = make_solver(scene, Backend::kHost, log);
+  for (int s = 0; s < steps; ++s) solver->step();
+  const ParticleSet<Host>& ps = solver->host_particles();
+  Rates r;
+  r.rho0 = double(scene.fluid.rho0);
+  r.dp = double(scene.sph.dp);
+  for (Index i = 0; i < ps.n_fluid; ++i) {
+    r.vmax = std::max(r.vmax, double(norm(ps.vel[i])));
+    r.acc[ps.id[i]] = ps.acc[i];
+    r.drho[ps.id[i]] = ps.drho[i];
+    r.pos[ps.id[i]] = ps.pos[i];
+    r.rho[ps.id[i]] = ps.rho[i];
+    r.acc_scale = std::max(r.acc_scale, double(norm(ps.acc[i])));
+    r.drho_scale = std::max(r.drho_scale, double(std::abs(ps.drho[i])));
+  }
+  return r;
+}
+
+struct Case {
+  const char* file;
+  std::vector<std::string> sets;
+  bool pairwise;  // the grid allows the colouring; else the pass falls back to the gather
+  int steps = 1;  // the rates of this step are compared (a flow from rest needs a few)
+};
+
+// Tolerances in units of the build's rounding: a wrong j-side term (sign, mass, diffusion
+// direction) differs by the term itself, many orders above these.
+class PairwiseMatchesGather : public ::testing::TestWithParam<Case> {};
+
+TEST_P(PairwiseMatchesGather, RatesAndStateByIdToRoundOff) {
+  const Case& c = GetParam();
+  const double eps = double(std::numeric_limits<Real>::epsilon());
+  // The rates of the same state (after `steps` - 1 steps that differ at round-off).
+  const Rates a = run(c.file, c.sets, true, c.steps), b = run(c.file, c.sets, false, c.steps);
+  ASSERT_EQ(a.acc.size(), b.acc.size());
+  ASSERT_GT(a.acc.size(), 100u);
+  // The density rate can cancel to near zero everywhere (a shear flow along a period): its
+  // scale is then the size of its terms, rho0 |v| / dp.
+  const double drho_scale = std::max(a.drho_scale, a.rho0 * a.vmax / a.dp);
+  double worst_acc = 0, worst_drho = 0;
+  for (const auto& [id, acc] : a.acc) {
+    worst_acc = std::max(worst_acc, double(norm(acc - b.acc.at(id))) / a.acc_scale);
+    worst_drho = std::max(
+        worst_drho, std::abs(double(a.drho.at(id) - b.drho.at(id))) / std::max(drho_scale, 1e-30));
+  }
+  std::printf(
+      "%s: rates of step %d, pairwise vs gather: max |da|/max|a| %.3g, "
+      "max |drho'|/max|drho'| %.3g\n",
+      c.file, c.steps, worst_acc, worst_drho);
+  EXPECT_LE(worst_acc, 1e3 * eps);
+  EXPECT_LE(worst_drho, 1e3 * eps);
+  EXPECT_GT(a.acc_scale, 0);
+  if (c.pairwise) {  // the pass ran: its sums come in another order, so some last bits differ
+    EXPECT_GT(worst_acc + worst_drho, 0);
+  } else {  // it fell back to the gather itself
+    EXPECT_EQ(worst_acc + worst_drho, 0);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Scenes, PairwiseMatchesGather,
+    ::testing::Values(
+        // 2D, artificial viscosity, Fourtakas diffusion, mDBC.
+        Case{"dam_break_2d.yaml", {"sph.dp=0.0146"}, true, 20},
+        // 3D, the same physics, the seed's kernel ratio.
+        Case{"dam_break_3d.yaml", {"sph.dp=0.03", "sph.h_factor=1.0"}, true, 20},
+        // 3D with SPS stress and laminar viscosity, DBC walls.
+        Case{"dam_break_3d.yaml",
+             {"sph.dp=0.03", "fluid.sps.enabled=true", "fluid.viscosity.model=laminar",
+              "fluid.viscosity.nu=1e-6", "sph.boundary=dbc"},
+             true, 20},
+        // 2D, periodic along x, HBP viscosity, Molteni diffusion: h = 0.93 sqrt(2) dp gives 12
+        // cells (of edge 1.1 h, symplectic) along the period: 6 tiles, a multiple of 3 colours.
+        Case{"bingham_poiseuille_2d.yaml", {"sph.h_factor=0.93"}, true, 20},
+        // The shipped h: 10 cells, 5 tiles, which two tiles of a colour would meet across.
+        Case{"bingham_poiseuille_2d.yaml", {}, false, 20},
+        // 3D, periodic on all axes, a grain (shipped h: 15 cells, 8 tiles; the gather runs).
+        Case{"sphere_settling.yaml", {}, false, 2}),
+    [](const ::testing::TestParamInfo<Case>& info) {
+      std::string n = info.param.file;
+      n = n.substr(0, n.find('.')) + "_" + std::to_string(info.index);
+      return n;
+    });
+
+// After 400 steps of the 2D dam break (the column is collapsing) the two passes still agree
+// to round-off growth: the trajectories are the same.
+TEST(PairwiseFluidPass, DamBreakTrajectoryMatchesTheGather) {
+  const Rates a = run("dam_break_2d.yaml", {"sph.dp=0.0146"}, true, 400);
+  const Rates b = run("dam_break_2d.yaml", {"sph.dp=0.0146"}, false, 400);
+  double worst_pos = 0, worst_rho = 0;
+  for (const auto& [id, x] : a.pos) {
+    worst_pos = std::max(worst_pos, double(norm(x - b.pos.at(id))) / 0.0146);
+    worst_rho = std::max(worst_rho, std::abs(double(a.rho.at(id) - b.rho.at(id))) / 1000.0);
+  }
+  std::printf("after 400 steps: max |dx|/dp %.3g, max |drho|/rho0 %.3g\n", worst_pos, worst_rho);
+  const double eps = double(std::numeric_limits<Real>::epsilon());
+  EXPECT_LE(worst_pos, 1e4 * eps);
+  EXPECT_LE(worst_rho, 1e4 * eps);
+}
+
+TEST(PairwiseFluidPass, BitIdenticalForAnyThreadCount) {
+#ifndef _OPENMP
+  GTEST_SKIP() << "built without OpenMP";
+#else
+  const int before = omp_get_max_threads();
+  auto state = [](int threads) {
+    omp_set_num_threads(threads);
+    return run("dam_break_3d.yaml", {"sph.dp=0.03", "sph.h_factor=1.0"}, true, 10);
+  };
+  const Rates one = state(1), two = state(2), three = state(3);
+  omp_set_num_threads(before);
+  ASSERT_EQ(one.pos.size(), two.pos.size());
+  std::size_t differ2 = 0, differ3 = 0;
+  for (const auto& [id, x] : one.pos) {
+    const auto same = [&](const Rates& o) {
+      const Vec3 y = o.pos.at(id), a = one.acc.at(id), b = o.acc.at(id);
+      return std::memcmp(&x, &y, sizeof x) == 0 && std::memcmp(&a, &b, sizeof a) == 0 &&
+             one.rho.at(id) == o.rho.at(id);
+    };
+    differ2 += same(two) ? 0 : 1;
+    differ3 += same(three) ? 0 : 1;
+  }
+  EXPECT_EQ(differ2, 0u) << "of " << one.pos.size() << " particles";
+  EXPECT_EQ(differ3, 0u) << "of " << one.pos.size() << " particles";
+#endif
+}
+
+TEST(PairwiseFluidPass, TilingRefusesPeriodicAxesThatWouldCollide) {
+  const bool open[3] = {false, false, false};
+  const bool px[3] = {true, false, false};
+  const bool pz[3] = {false, false, true};
+  // Open axes: always.
+  EXPECT_TRUE(
+      pairwise_tiling_ok(make_cell_grid(3, Vec3{0, 0, 0}, Vec3{1, 0.7, 0.3}, 0.05, open, 2)));
+  // Periodic x with 12 cells of reach 2: 6 tiles, a multiple of 3 colours.
+  const CellGrid g12 = make_cell_grid(3, Vec3{0, 0, 0}, Vec3{1.5, 0.5, 0.5}, 0.125, px, 2);
+  ASSERT_EQ(g12.n[0], 12);
+  EXPECT_TRUE(pairwise_tiling_ok(g12));
+  // Periodic x with 8 cells: 4 tiles, tiles 0 and 3 share a colour and meet across the wrap.
+  const CellGrid g8 = make_cell_grid(3, Vec3{0, 0, 0}, Vec3{1.0, 0.5, 0.5}, 0.125, px, 2);
+  ASSERT_EQ(g8.n[0], 8);
+  EXPECT_FALSE(pairwise_tiling_ok(g8));
+  // Periodic z takes 3 colours (later slots lie on both sides across the wrap): 4 tiles fail.
+  const CellGrid z8 = make_cell_grid(3, Vec3{0, 0, 0}, Vec3{0.5, 0.5, 1.0}, 0.125, pz, 2);
+  ASSERT_EQ(z8.n[2], 8);
+  EXPECT_FALSE(pairwise_tiling_ok(z8));
+}
+
+}  // namespace
+}  // namespace sphdem
