@@ -142,8 +142,9 @@ void compute_viscous_state(Space s, ParticleView v, NeighborLists nl, StepParams
 //   a_i += m_j acc,  a_j -= m_i acc        (each momentum term is antisymmetric in i, j)
 //   drho_i += m_j drho_i,  drho_j += m_i drho_j
 // `j_fluid` selects density diffusion (fluid pairs only, as in DualSPHysics) and the velocity
-// seen by the viscous term. drho_j is filled only with `both` (fluid pairs): the Fourtakas
-// hydrostatic difference is not odd in the height, so the j side is evaluated on its own.
+// seen by the viscous term. drho_j is filled only with `both`: the Fourtakas hydrostatic
+// difference is not odd in the height, and the penetration control changes the continuity
+// velocity on the fluid's side of a fluid-wall pair only, so the j side is evaluated on its own.
 struct PairCore {
   Vec3 acc;
   Real drho_i = 0, drho_j = 0;
@@ -158,7 +159,8 @@ SPHDEM_HD SPHDEM_INLINE PairCore pair_core(const StepParams& p, const ParticleVi
   const Real f = kernel_f(p.kernel, r);
   const Real rho_i = v.rho[i], rho_j = v.rho[j];
   // Continuity uses the solid's own velocity for boundary particles.
-  Vec3 v_ij = v.vel[i] - v.vel[j];
+  const Vec3 v_raw = v.vel[i] - v.vel[j];
+  Vec3 v_ij = v_raw;
   Real p_i = v.press[i], p_j = v.press[j];
   if (p.no_penetration && i_fluid != j_fluid) {  // a fluid-wall pair (sph/mdbc.hpp)
     if (i_fluid) {
@@ -168,9 +170,8 @@ SPHDEM_HD SPHDEM_INLINE PairCore pair_core(const StepParams& p, const ParticleVi
       p_j = wall_pair_pressure(p_j);
     }
   }
-  const Real cont = continuity_ij(Real(1), v_ij, r_ij, f);
-  c.drho_i = cont;
-  c.drho_j = cont;
+  c.drho_i = continuity_ij(Real(1), v_ij, r_ij, f);
+  c.drho_j = both ? continuity_ij(Real(1), v_raw, r_ij, f) : Real(0);
   if (p.diffusion && i_fluid && j_fluid) {
     const Real height_ij = -dot(r_ij, p.g_hat);
     const Real d =

@@ -17,10 +17,9 @@ bool make_tiling(const CellGrid& g, Tiling& t) {
   for (int k = 0; k < 3; ++k) {
     if (k == 1 && g.dim == 2) continue;
     t.nt[k] = (g.n[k] + r - 1) / r;
-    // Later slots lie at z-cells cz..cz+r on an open z axis (keys are z-major); along x and y,
-    // and along a periodic z (the wrap), they lie on either side.
-    const int colours = (k == 2 && !g.periodic[2]) ? 2 : 3;
-    t.nc[k] = std::min(colours, t.nt[k]);
+    // A tile writes its own particles and those of the adjacent tiles on either side (boundary
+    // neighbours, and later fluid slots across a periodic wrap): three colours per axis.
+    t.nc[k] = std::min(3, t.nt[k]);
     if (g.periodic[k] && (g.n[k] % r != 0 || t.nt[k] % t.nc[k] != 0)) return false;
   }
   return true;
@@ -34,7 +33,7 @@ bool pairwise_tiling_ok(const CellGrid& g) {
 }
 
 bool compute_fluid_rates_pairwise(ParticleView v, const NeighborLists& nl, const StepParams& p,
-                                  Index n, Real* rate) {
+                                  Index n, Index wall_begin, Index end, Real* rate) {
   const CellGrid& g = p.grid;
   Tiling t;
   if (!make_tiling(g, t)) return false;
@@ -49,8 +48,15 @@ bool compute_fluid_rates_pairwise(ParticleView v, const NeighborLists& nl, const
       v.drho[i] = 0;
       rate[i] = 0;
     }
-    // Every particle of the tile at tile coordinates (tx, ty, tz): its later fluid neighbours
-    // (both sides written), then its halo and boundary neighbours (its side only).
+#pragma omp for schedule(static)
+    for (Index b = wall_begin; b < end; ++b) {
+      v.acc[b] = Vec3();
+      v.drho[b] = 0;
+      rate[b] = 0;
+    }
+    // Every fluid particle of the tile at tile coordinates (tx, ty, tz): its later fluid
+    // neighbours and its boundary neighbours (both sides written), and its halo neighbours (its
+    // side only: their owners compute the other side).
     auto tile = [&](int tx, int ty, int tz) {
       const int x0 = tx * r, x1 = std::min(x0 + r, g.n[0]) - 1;
       const int y0 = ty * r, y1 = g.dim == 2 ? 0 : std::min(y0 + r, g.n[1]) - 1;
@@ -63,25 +69,29 @@ bool compute_fluid_rates_pairwise(ParticleView v, const NeighborLists& nl, const
             const Vec3 ri = v.pos[i];
             const Real m_i = v.mass[i];
             PairSums si;
+            // One evaluation of the pair (i, j), written to both sides.
+            auto both = [&](Index j, const Vec3& r_ij, Real r2, bool j_fluid) {
+              if (r2 <= Real(0)) return;  // coincident particles, as in the gather
+              const PairCore c = pair_core(p, v, i, j, r_ij, r2, true, j_fluid, true);
+              const Real m_j = v.mass[j];
+              si.acc += c.acc * m_j;
+              si.drho += c.drho_i * m_j;
+              if (c.rate > si.visc_rate) si.visc_rate = c.rate;
+              v.acc[j] -= c.acc * m_i;
+              v.drho[j] += c.drho_j * m_i;
+              if (c.rate > rate[j]) rate[j] = c.rate;
+            };
             for_each_neighbor_from(
-                g, nl.fluid, v.pos, ri, p.radius2, s + 1, [&](Index j, const Vec3& r_ij, Real r2) {
-                  if (r2 <= Real(0)) return;  // coincident particles, as in the gather
-                  const PairCore c = pair_core(p, v, i, j, r_ij, r2, true, true, true);
-                  const Real m_j = v.mass[j];
-                  si.acc += c.acc * m_j;
-                  si.drho += c.drho_i * m_j;
-                  if (c.rate > si.visc_rate) si.visc_rate = c.rate;
-                  v.acc[j] -= c.acc * m_i;
-                  v.drho[j] += c.drho_j * m_i;
-                  if (c.rate > rate[j]) rate[j] = c.rate;
-                });
+                g, nl.fluid, v.pos, ri, p.radius2, s + 1,
+                [&](Index j, const Vec3& r_ij, Real r2) { both(j, r_ij, r2, true); });
             if (nl.has_halo)
               for_each_neighbor(g, nl.halo, v.pos, ri, p.radius2,
                                 [&](Index j, const Vec3& r_ij, Real r2) {
                                   accumulate_pair(p, v, i, j, r_ij, r2, true, true, si);
                                 });
+            // The fluid's side of a fluid-wall pair, and the wall's (the fluid force on it).
             for_each_boundary_neighbor(p, nl, v.pos, ri, [&](Index j, const Vec3& r_ij, Real r2) {
-              accumulate_pair(p, v, i, j, r_ij, r2, true, false, si);
+              both(j, r_ij, r2, false);
             });
             v.acc[i] += si.acc;
             v.drho[i] += si.drho;

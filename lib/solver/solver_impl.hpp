@@ -249,13 +249,16 @@ class Solver final : public SolverBase {
       }
     }
     auto t1 = tick();
-    bool pairwise = false;  // the CPU evaluates each owned fluid pair once
+    bool pairwise = false;  // the CPU evaluates each pair with an owned fluid particle once
     if constexpr (std::is_same_v<Space, Host>) {
       if (p_.pairwise)
-        pairwise = compute_fluid_rates_pairwise(v, nl, p_, ps_.n_fluid, rate_.data());
+        pairwise = compute_fluid_rates_pairwise(v, nl, p_, ps_.n_fluid, ps_.wall_begin(),
+                                                ps_.size(), rate_.data());
     }
-    if (!pairwise) compute_rates(Space{}, v, nl, p_, 0, ps_.n_fluid, true, rate_.data());
-    compute_rates(Space{}, v, nl, p_, ps_.wall_begin(), ps_.size(), false, rate_.data());
+    if (!pairwise) {
+      compute_rates(Space{}, v, nl, p_, 0, ps_.n_fluid, true, rate_.data());
+      compute_rates(Space{}, v, nl, p_, ps_.wall_begin(), ps_.size(), false, rate_.data());
+    }
     if (ex_) {
       wall_sync(ps_.acc, true);  // the owner holds the whole fluid force on its wall particles
       grain_sum(ps_.acc);        // every rank holds the whole fluid force on every grain slot
