@@ -834,10 +834,10 @@ void check_scene(const Scene& scene, std::ostream& os) {
   // Rough cost from the CPU figures in docs/BENCHMARKS.md: in 3D, double precision, a thread
   // does about 2e7 (fluid particle x neighbour)-steps/s for the whole step, the neighbours being
   // the lattice sites within 2h (1.3e7 before the pairwise fluid pass, which made the 3D dam
-  // break's step 1.5-1.75x and the flume's 1.5-1.65x faster); 2D runs go faster. mDBC adds a ghost-node gather per boundary
-  // particle, near fluid or not: about 1 us per particle-step in 3D (0.7-1.2 us measured: the
-  // 3D dam break at 25k, and the flume's half scene at dp = 5 mm, 107k walls, where it was a
-  // quarter of the step).
+  // break's step 1.5-1.75x and the flume's 1.5-1.65x faster); 2D runs go faster. mDBC adds a
+  // ghost-node gather per boundary particle, near fluid or not: about 1 us per particle-step in 3D
+  // (0.7-1.2 us measured: the 3D dam break at 25k, and the flume's half scene at dp = 5 mm, 107k
+  // walls, where it was a quarter of the step).
   const double kh = double(2 * p.h / p.dp);
   const double per_thread = scene.dim == 3 ? 2e7 / (4.18879 * kh * kh * kh) : 2.5e5;
   const double gathers = scene.sph.boundary == BoundaryMethod::kMdbc && scene.dim == 3

@@ -159,19 +159,21 @@ SPHDEM_HD SPHDEM_INLINE PairCore pair_core(const StepParams& p, const ParticleVi
   const Real f = kernel_f(p.kernel, r);
   const Real rho_i = v.rho[i], rho_j = v.rho[j];
   // Continuity uses the solid's own velocity for boundary particles.
-  const Vec3 v_raw = v.vel[i] - v.vel[j];
-  Vec3 v_ij = v_raw;
+  const Vec3 v_ij = v.vel[i] - v.vel[j];
   Real p_i = v.press[i], p_j = v.press[j];
+  // Both sides of a pair share one continuity term, except where the penetration control gives
+  // the fluid's side of a fluid-wall pair its own velocity.
+  const Real cont = continuity_ij(Real(1), v_ij, r_ij, f);
+  c.drho_i = cont;
+  c.drho_j = both ? cont : Real(0);
   if (p.no_penetration && i_fluid != j_fluid) {  // a fluid-wall pair (sph/mdbc.hpp)
     if (i_fluid) {
-      v_ij = wall_continuity_velocity(v_ij, r_ij, v.normal[j]);
+      c.drho_i = continuity_ij(Real(1), wall_continuity_velocity(v_ij, r_ij, v.normal[j]), r_ij, f);
       p_i = wall_pair_pressure(p_i);
     } else {  // the same pair seen from the wall: its force
       p_j = wall_pair_pressure(p_j);
     }
   }
-  c.drho_i = continuity_ij(Real(1), v_ij, r_ij, f);
-  c.drho_j = both ? continuity_ij(Real(1), v_raw, r_ij, f) : Real(0);
   if (p.diffusion && i_fluid && j_fluid) {
     const Real height_ij = -dot(r_ij, p.g_hat);
     const Real d =
