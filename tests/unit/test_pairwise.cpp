@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <map>
 #include <memory>
 #include <sstream>
@@ -17,6 +18,9 @@
 
 #include "app/simulation.hpp"
 #include "io/scene_yaml.hpp"
+#include "coupling/grain_boundary.hpp"
+#include "scene/build.hpp"
+#include "scene/build_dem.hpp"
 #include "solver/pairwise_host.hpp"
 
 namespace sphdem {
@@ -31,6 +35,7 @@ struct Rates {
   std::map<GlobalId, Real> drho, rho;
   double acc_scale = 0, drho_scale = 0;
   double vmax = 0, rho0 = 0, dp = 0;
+  Index grains = 0;                   // grain boundary slots
   std::map<GlobalId, Vec3> wall_acc;  // boundary slots: the fluid force per unit mass
   std::map<GlobalId, Real> wall_drho;
   double wall_acc_scale = 0, wall_drho_scale = 0;
@@ -40,6 +45,7 @@ Rates collect(const Scene& scene, SolverBase& solver) {
   const ParticleSet<Host>& ps = solver.host_particles();
   Rates r;
   r.rho0 = double(scene.fluid.rho0);
+  r.grains = ps.n_grain;
   r.dp = double(scene.sph.dp);
   for (Index i = 0; i < ps.n_fluid; ++i) {
     r.vmax = std::max(r.vmax, double(norm(ps.vel[i])));
@@ -59,21 +65,42 @@ Rates collect(const Scene& scene, SolverBase& solver) {
   return r;
 }
 
-std::unique_ptr<SolverBase> solver_for(const std::string& file, std::vector<std::string> sets,
-                                       bool pairwise, Scene* scene_out = nullptr) {
+// A solver as `sphdem run` builds it: a scene with grains (dem) gets their boundary particles,
+// placed from the grains' poses (the grains do not move here: no DEM step is taken).
+struct Built {
+  Scene scene;
+  DemBuild dem;
+  std::unique_ptr<GrainCoupling> coupling;
+  std::unique_ptr<SolverBase> solver;
+};
+
+std::unique_ptr<Built> solver_for(const std::string& file, std::vector<std::string> sets,
+                                  bool pairwise) {
   sets.push_back(std::string("sph.pairwise=") + (pairwise ? "true" : "false"));
-  const Scene scene = load_scene(input(file), sets);
-  if (scene_out) *scene_out = scene;
+  auto b = std::make_unique<Built>();
+  b->scene = load_scene(input(file), sets);
   std::ostringstream log;
-  return make_solver(scene, Backend::kHost, log);
+  std::function<void(ParticleSet<Host>&, BuildReport&)> prepare;
+  if (b->scene.dem.enabled) {
+    b->dem = build_dem(b->scene, log);
+    b->coupling =
+        std::make_unique<GrainCoupling>(*b->dem.system, b->scene.sph.dp, boundary_depth(b->scene),
+                                        b->scene.fluid.rho0, b->scene.dim);
+    Built* bp = b.get();
+    prepare = [bp](ParticleSet<Host>& ps, BuildReport& br) {
+      br.fluid -= bp->coupling->append(ps, *bp->dem.system);
+      br.grain = bp->coupling->particle_count();
+    };
+  }
+  b->solver = make_solver(b->scene, Backend::kHost, log, nullptr, nullptr, {0, 0, 0}, prepare);
+  return b;
 }
 
 // Steps a solver and returns, by id, the rates of its last step and the state after it.
 Rates run(const std::string& file, const std::vector<std::string>& sets, bool pairwise, int steps) {
-  Scene scene;
-  auto solver = solver_for(file, sets, pairwise, &scene);
-  for (int s = 0; s < steps; ++s) solver->step();
-  return collect(scene, *solver);
+  auto b = solver_for(file, sets, pairwise);
+  for (int s = 0; s < steps; ++s) b->solver->step();
+  return collect(b->scene, *b->solver);
 }
 
 // The rates of one step from the same state with both passes: the gather runs `steps` - 1 steps
@@ -81,22 +108,22 @@ Rates run(const std::string& file, const std::vector<std::string>& sets, bool pa
 // state (as from a checkpoint, exactly), and both take one step.
 std::pair<Rates, Rates> same_state(const std::string& file, const std::vector<std::string>& sets,
                                    int steps) {
-  Scene scene;
-  auto gather = solver_for(file, sets, false, &scene);
+  auto gather = solver_for(file, sets, false);
   auto pairwise = solver_for(file, sets, true);
-  for (int s = 0; s + 1 < steps; ++s) gather->step();
-  pairwise->restore(gather->host_particles(), gather->counters());
-  gather->step();
-  pairwise->step();
-  return {collect(scene, *pairwise), collect(scene, *gather)};
+  for (int s = 0; s + 1 < steps; ++s) gather->solver->step();
+  pairwise->solver->restore(gather->solver->host_particles(), gather->solver->counters());
+  gather->solver->step();
+  pairwise->solver->step();
+  return {collect(pairwise->scene, *pairwise->solver), collect(gather->scene, *gather->solver)};
 }
 
 struct Case {
   const char* file;
   std::vector<std::string> sets;
-  bool pairwise;  // the grid allows the colouring; else the pass falls back to the gather
-  int steps = 1;  // the rates of this step are compared (a flow from rest needs a few)
-  int walls = 1;  // 0: the scene has no boundary particles
+  bool pairwise;        // the grid allows the colouring; else the pass falls back to the gather
+  int steps = 1;        // the rates of this step are compared (a flow from rest needs a few)
+  int walls = 1;        // 0: the scene has no boundary particles
+  bool grains = false;  // the scene has grain boundary particles (moving mDBC)
 };
 
 // Tolerances in units of the build's rounding: a wrong j-side term (sign, mass, diffusion
@@ -129,6 +156,7 @@ TEST_P(PairwiseMatchesGather, RatesAndStateByIdToRoundOff) {
   // with DBC, their density rate).
   ASSERT_EQ(a.wall_acc.size(), b.wall_acc.size());
   ASSERT_EQ(a.wall_acc.empty(), c.walls == 0) << "boundary particles touched by fluid";
+  ASSERT_EQ(a.grains > 0, c.grains) << "grain boundary particles";
   if (c.walls) {
     ASSERT_GT(a.wall_acc_scale, 0);
   }
@@ -172,16 +200,16 @@ INSTANTIATE_TEST_SUITE_P(
              20},
         // A floating grain (moving mDBC boundary particles), 3D, periodic along x and y:
         // h = 1.1 sqrt(3) dp gives 6 cells (3 tiles) along each period.
-        Case{"floating_box.yaml", {"sph.dp=0.02", "sph.h_factor=1.1"}, true, 10},
+        Case{"floating_box.yaml", {"sph.dp=0.02", "sph.h_factor=1.1"}, true, 10, 1, true},
         // The shipped h: 5 cells, not a whole number of tiles (the gather runs).
-        Case{"floating_box.yaml", {"sph.dp=0.02"}, false, 10},
+        Case{"floating_box.yaml", {"sph.dp=0.02"}, false, 10, 1, true},
         // 2D, periodic along x, HBP viscosity, Molteni diffusion: h = 0.93 sqrt(2) dp gives 12
         // cells (of edge 1.1 h, symplectic) along the period: 6 tiles, a multiple of 3 colours.
         Case{"bingham_poiseuille_2d.yaml", {"sph.h_factor=0.93"}, true, 20},
         // The shipped h: 10 cells, 5 tiles, which two tiles of a colour would meet across.
         Case{"bingham_poiseuille_2d.yaml", {}, false, 20},
         // 3D, periodic on all axes, a grain (shipped h: 15 cells, 8 tiles; the gather runs).
-        Case{"sphere_settling.yaml", {}, false, 2, 0}),
+        Case{"sphere_settling.yaml", {}, false, 2, 1, true}),
     [](const ::testing::TestParamInfo<Case>& info) {
       std::string n = info.param.file;
       n = n.substr(0, n.find('.')) + "_" + std::to_string(info.index);
