@@ -55,6 +55,12 @@ void for_each(Device, Index n, const F& f) {
   detail::check_cuda(cudaGetLastError(), "for_each launch");
 }
 
+// One thread per iteration already balances uneven work on the device.
+template <class F>
+void for_each_uneven(Device d, Index n, const F& f) {
+  for_each(d, n, f);
+}
+
 template <class Op, class T, class F>
 T reduce(Device, Index n, const F& f) {
   const Index chunk = (n + kReduceChunks - 1) / kReduceChunks;

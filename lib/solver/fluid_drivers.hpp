@@ -60,7 +60,7 @@ void compute_pressure(Space s, ParticleView v, Index begin, Index end, EosParams
 template <class Space>
 void update_mdbc(Space s, ParticleView v, NeighborLists nl, StepParams p, Index begin, Index end,
                  const std::uint8_t* mine = nullptr) {
-  for_each(
+  for_each_uneven(
       s, end - begin, SPHDEM_LAMBDA(Index k) {
         const Index b = begin + k;
         if (mine && !mine[k]) {
@@ -240,7 +240,7 @@ SPHDEM_HD SPHDEM_INLINE void accumulate_pair(const StepParams& p, const Particle
 template <class Space>
 void compute_rates(Space s, ParticleView v, NeighborLists nl, StepParams p, Index begin, Index end,
                    bool fluid_range, Real* rate) {
-  for_each(
+  for_each_uneven(
       s, end - begin, SPHDEM_LAMBDA(Index k) {
         const Index i = begin + k;
         const Vec3 ri = v.pos[i];
