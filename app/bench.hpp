@@ -17,6 +17,7 @@ struct BenchOptions {
   int steps = 20;
   Backend backend = Backend::kAuto;
   bool json = false;
+  std::string out_dir;  // scenes with grains run into it; empty: a temporary folder, removed after
 };
 
 void run_bench(const BenchOptions& opt, std::ostream& os);

@@ -214,31 +214,38 @@ RunResult run_granular(const Scene& scene, const RunOptions& opt) {
   const Real dt = build.dt;
   std::int64_t steps = 0;
   bool damping_on = false;
+  LoopTimes lt;  // bench: opt.time_after_steps
+  TimingMark mark;
   try {
     while (sys.time() < end - Real(1e-12) * end && (opt.max_steps < 0 || steps < opt.max_steps)) {
-      if (sys.time() >= next_diag - Real(1e-12)) {
-        write_diag();
-        next_diag += scene.diagnostics.every;
-      }
-      if (frames && sys.time() >= next_frame - Real(1e-12)) {
-        frames->write(sys.time(), node_particles(sys));
-        next_frame += scene.frames.every;
-      }
-      // Moving walls and the packing drag.
-      for (const std::string& gate : update_walls(scene, build, sys.time()))
-        log << "t = " << sys.time() << " s: solid '" << gate << "' removed (removed_at)\n";
-      const bool damp = sys.time() < scene.dem.settle_until && scene.dem.settle_damping > 0;
-      if (damp || damping_on) {
-        for (std::size_t i = 0; i < sys.bodies().size(); ++i) {
-          const dem::RigidBody& b = sys.bodies()[i];
-          sys.set_external(i, damp ? -scene.dem.settle_damping * b.mass * b.v : Vec3(), Vec3());
+      if (steps == opt.time_after_steps) mark = {clock::now(), PhaseTimes{}, lt};
+      timed(lt.io, [&] {
+        if (sys.time() >= next_diag - Real(1e-12)) {
+          write_diag();
+          next_diag += scene.diagnostics.every;
         }
-        damping_on = damp;
-      }
-      sys.step(dt);
+        if (frames && sys.time() >= next_frame - Real(1e-12)) {
+          frames->write(sys.time(), node_particles(sys));
+          next_frame += scene.frames.every;
+        }
+      });
+      timed(lt.dem, [&] {
+        // Moving walls and the packing drag.
+        for (const std::string& gate : update_walls(scene, build, sys.time()))
+          log << "t = " << sys.time() << " s: solid '" << gate << "' removed (removed_at)\n";
+        const bool damp = sys.time() < scene.dem.settle_until && scene.dem.settle_damping > 0;
+        if (damp || damping_on) {
+          for (std::size_t i = 0; i < sys.bodies().size(); ++i) {
+            const dem::RigidBody& b = sys.bodies()[i];
+            sys.set_external(i, damp ? -scene.dem.settle_damping * b.mass * b.v : Vec3(), Vec3());
+          }
+          damping_on = damp;
+        }
+        sys.step(dt);
+      });
       ++steps;
       ++step;
-      check_grain_guards(scene, sys, build.min_diameter);
+      timed(lt.guards, [&] { check_grain_guards(scene, sys, build.min_diameter); });
       const auto now = clock::now();
       const int sig = g_signal;
       const bool by_steps = ck.every_steps > 0 && step % ck.every_steps == 0;
@@ -249,8 +256,10 @@ RunResult run_granular(const Scene& scene, const RunOptions& opt) {
       if (by_steps || by_time || by_wall || sig != 0) {
         if (sig != 0) log << "signal " << (sig == SIGTERM ? "SIGTERM" : "SIGUSR1") << " received\n";
         diag.flush();
-        save(checkpoint_path(opt.out_dir, step));
-        prune_checkpoints(opt.out_dir, ck.keep);
+        timed(lt.io, [&] {
+          save(checkpoint_path(opt.out_dir, step));
+          prune_checkpoints(opt.out_dir, ck.keep);
+        });
         last_checkpoint_wall = now;
         while (ck.every_time > 0 && next_checkpoint_time <= sys.time() + Real(1e-12))
           next_checkpoint_time += ck.every_time;
@@ -278,6 +287,11 @@ RunResult run_granular(const Scene& scene, const RunOptions& opt) {
         }
         log.file() << line.str() << std::endl;  // flushed: tail -f run.log shows progress
       }
+    }
+    if (opt.time_after_steps >= 0 && steps > opt.time_after_steps) {
+      r.timing = timing_since(mark, steps - opt.time_after_steps, PhaseTimes{}, lt);
+      r.timing.grains = Index(sys.bodies().size());
+      r.timing.contacts = double(sys.contact_count());
     }
     // The final row and frame only at the end time: a run stopped early (--max-steps, SIGTERM)
     // and continued from its checkpoint then writes the same rows as one straight run.

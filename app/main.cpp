@@ -81,6 +81,8 @@ int main(int argc, char** argv) {
   bench->add_option("--set", sets, "override a scene key");
   bench->add_option("--backend", backend, "auto, host or device")->capture_default_str();
   bench->add_flag("--json", bo.json, "JSON output");
+  bench->add_option("--out", bo.out_dir,
+                    "run folder for scenes with grains (default: a temporary one, removed after)");
 
   app.add_subcommand("info", "print the build configuration and the GPUs seen");
 

@@ -23,6 +23,25 @@ std::string prepare_output(const RunOptions& opt) {
   return restart_file;
 }
 
+RunTiming timing_since(const TimingMark& from, std::int64_t steps, const PhaseTimes& solver_now,
+                       const LoopTimes& loop_now) {
+  RunTiming t;
+  t.steps = steps;
+  t.wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - from.t).count();
+  const PhaseTimes& a = from.solver;
+  t.solver.cell_list = solver_now.cell_list - a.cell_list;
+  t.solver.halo = solver_now.halo - a.halo;
+  t.solver.mdbc = solver_now.mdbc - a.mdbc;
+  t.solver.forces = solver_now.forces - a.forces;
+  t.solver.integrate = solver_now.integrate - a.integrate;
+  t.solver.other = solver_now.other - a.other;
+  t.loop.coupling = loop_now.coupling - from.loop.coupling;
+  t.loop.dem = loop_now.dem - from.loop.dem;
+  t.loop.io = loop_now.io - from.loop.io;
+  t.loop.guards = loop_now.guards - from.loop.guards;
+  return t;
+}
+
 std::string fmt_duration(double s) {
   std::ostringstream os;
   if (!std::isfinite(s)) return "?";

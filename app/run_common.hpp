@@ -2,6 +2,7 @@
 // only): the run log, the summary file, signal handling.
 #pragma once
 
+#include <chrono>
 #include <csignal>
 #include <fstream>
 #include <iostream>
@@ -46,6 +47,23 @@ std::string prepare_output(const RunOptions& opt);
 
 std::string fmt_duration(double s);
 void write_summary(const std::string& path, const Scene& scene, const RunResult& r);
+
+// Runs f() and adds its wall seconds to `acc`.
+template <class F>
+void timed(double& acc, F&& f) {
+  const auto t0 = std::chrono::steady_clock::now();
+  f();
+  acc += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// The timing of steps [from, now) of a run: `loop` and `solver` minus their values at `from`.
+struct TimingMark {
+  std::chrono::steady_clock::time_point t;
+  PhaseTimes solver;
+  LoopTimes loop;
+};
+RunTiming timing_since(const TimingMark& from, std::int64_t steps, const PhaseTimes& solver_now,
+                       const LoopTimes& loop_now);
 
 // Set by SIGTERM / SIGUSR1; polled once per step.
 extern volatile std::sig_atomic_t g_signal;

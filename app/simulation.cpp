@@ -635,32 +635,42 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
   const int guard_every = scene.guards.check_every > 0                    ? scene.guards.check_every
                           : std::string(solver->space_name()) == "device" ? 20
                                                                           : 1;
+  LoopTimes lt;  // the loop's own phases (bench: opt.time_after_steps)
+  TimingMark mark;
   try {
     while (solver->time() < end - Real(1e-12) * end &&
            (opt.max_steps < 0 || steps < opt.max_steps)) {
-      if (solver->time() >= next_diag - Real(1e-12)) {
-        write_diagnostics();
-        next_diag += scene.diagnostics.every;
-      }
-      if (frames && solver->time() >= next_frame - Real(1e-12)) {
-        with_share([&](const ParticleSet<Host>& sh) { frames->write(solver->time(), sh); });
-        next_frame += scene.frames.every;
-      }
-      if (insitu->due(solver->step_count()))  // in situ (see above)
-        with_share([&](const ParticleSet<Host>& sh) {
-          insitu->execute(solver->step_count(), solver->time(), sh, p);
-        });
+      if (steps == opt.time_after_steps) mark = {clock::now(), solver->phase_times(), lt};
+      timed(lt.io, [&] {
+        if (solver->time() >= next_diag - Real(1e-12)) {
+          write_diagnostics();
+          next_diag += scene.diagnostics.every;
+        }
+        if (frames && solver->time() >= next_frame - Real(1e-12)) {
+          with_share([&](const ParticleSet<Host>& sh) { frames->write(solver->time(), sh); });
+          next_frame += scene.frames.every;
+        }
+        if (insitu->due(solver->step_count()))  // in situ (see above)
+          with_share([&](const ParticleSet<Host>& sh) {
+            insitu->execute(solver->step_count(), solver->time(), sh, p);
+          });
+      });
       if (coupling)  // the grain boundary particles take the grains' poses at t^n
-        solver->move_grains([&](ParticleSet<Host>& ps) { coupling->place(ps, *dem.system); });
+        timed(lt.coupling, [&] {
+          solver->move_grains([&](ParticleSet<Host>& ps) { coupling->place(ps, *dem.system); });
+        });
       const StepStats st = solver->step();
       if (coupling) {
         // The fluid's force on each grain at t^n drives the DEM from t^n to t^n + dt, in
         // sub-steps no longer than the DEM step (contacts between grains and with walls).
         dem::DemSystem& sys = *dem.system;
-        coupling->loads(solver->host_particles(), sys, grain_force, grain_torque);
-        for (std::size_t i = 0; i < gradient_force.size(); ++i) grain_force[i] += gradient_force[i];
-        for (std::size_t i = 0; i < sys.bodies().size(); ++i)
-          sys.set_external(i, grain_force[i], grain_torque[i]);
+        timed(lt.coupling, [&] {
+          coupling->loads(solver->host_particles(), sys, grain_force, grain_torque);
+          for (std::size_t i = 0; i < gradient_force.size(); ++i)
+            grain_force[i] += gradient_force[i];
+          for (std::size_t i = 0; i < sys.bodies().size(); ++i)
+            sys.set_external(i, grain_force[i], grain_torque[i]);
+        });
         const double want = std::ceil(double(st.dt) / double(dem.dt) - 1e-9);
         if (want > double(scene.dem.substeps_max))
           throw StabilityError(
@@ -669,11 +679,13 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
               " s, more than dem.substeps_max = " + std::to_string(scene.dem.substeps_max));
         const int nsub = std::max(1, int(want));
         const Real h = st.dt / Real(nsub);
-        for (int k = 0; k < nsub; ++k) {
-          update_walls(scene, dem, sys.time());
-          sys.step(h);
-        }
-        check_grain_guards(scene, sys, dem.min_diameter);
+        timed(lt.dem, [&] {
+          for (int k = 0; k < nsub; ++k) {
+            update_walls(scene, dem, sys.time());
+            sys.step(h);
+          }
+        });
+        timed(lt.guards, [&] { check_grain_guards(scene, sys, dem.min_diameter); });
       }
       open_gates();
       ++steps;
@@ -681,6 +693,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
       if (st.removed > 0)
         log << "t = " << solver->time() << " s: " << st.removed
             << " fluid particles left the domain\n";
+      const auto guards_from = clock::now();
       check_step_guards(scene, p, st, solver->time(), solver->step_count());
       if (solver->fluid_count() == 0) {
         log << "t = " << solver->time() << " s: all fluid has left the domain; stopping\n";
@@ -713,6 +726,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
         }
       }
       const auto now = clock::now();
+      lt.guards += std::chrono::duration<double>(now - guards_from).count();
       // Checkpoints: by steps, simulated time, wall time, or on a signal.
       int sig = g_signal;
       const bool by_steps = ck.every_steps > 0 && solver->step_count() % ck.every_steps == 0;
@@ -729,8 +743,10 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
       }
       if (by_steps || by_time || by_wall || sig != 0) {
         if (sig != 0) log << "signal " << (sig == SIGTERM ? "SIGTERM" : "SIGUSR1") << " received\n";
-        save(checkpoint_path(opt.out_dir, solver->step_count()));
-        prune_checkpoints(opt.out_dir, ck.keep);
+        timed(lt.io, [&] {
+          save(checkpoint_path(opt.out_dir, solver->step_count()));
+          prune_checkpoints(opt.out_dir, ck.keep);
+        });
         last_checkpoint_wall = now;
         while (ck.every_time > 0 && next_checkpoint_time <= solver->time() + Real(1e-12))
           next_checkpoint_time += ck.every_time;
@@ -758,6 +774,17 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
           std::cout << line.str() << "\n";
         }
         log.file() << line.str() << std::endl;  // flushed: tail -f run.log shows progress
+      }
+    }
+    if (opt.time_after_steps >= 0 && steps > opt.time_after_steps) {
+      r.timing = timing_since(mark, steps - opt.time_after_steps, solver->phase_times(), lt);
+      r.timing.pairs = solver->last_pair_count();
+      r.timing.fluid = solver->fluid_count();
+      const ParticleSet<Host>& hp = solver->host_particles();
+      r.timing.boundary = hp.n_wall + hp.n_grain;
+      if (coupling) {
+        r.timing.grains = Index(dem.system->bodies().size());
+        r.timing.contacts = double(dem.system->contact_count());
       }
     }
     if (!r.interrupted) {

@@ -27,6 +27,27 @@ struct RunOptions {
   std::string restart;                // checkpoint file, "latest" (newest in out_dir), or "" (none)
   bool handle_signals = true;         // SIGTERM/SIGUSR1 write a checkpoint (SIGTERM then stops)
   std::array<int, 3> procs{0, 0, 0};  // process grid on many ranks (0: PETSc chooses)
+  std::int64_t time_after_steps = -1;  // >= 0 (bench): RunResult::timing covers the later steps
+};
+
+// Wall seconds spent by a run's loop outside the solver's own phases.
+struct LoopTimes {
+  double coupling = 0;  // grain poses to their boundary particles, fluid loads to the grains
+  double dem = 0;       // DEM steps (contacts and rigid-body integration) and moving walls
+  double io = 0;        // diagnostics CSVs, frames, in situ, checkpoints
+  double guards = 0;    // stability guards
+};
+
+// The steps of a run after RunOptions::time_after_steps, timed per phase (`sphdem bench` on
+// scenes with grains). Empty (steps = 0) unless asked for and reached.
+struct RunTiming {
+  std::int64_t steps = 0;
+  double wall = 0;    // seconds over those steps
+  PhaseTimes solver;  // the fluid solver's phases over those steps
+  LoopTimes loop;
+  double pairs = 0;  // neighbour pairs within 2h of the last fluid force pass (this rank)
+  Index fluid = 0, boundary = 0, grains = 0;
+  double contacts = 0;  // DEM contact points after the last step
 };
 
 struct RunResult {
@@ -43,6 +64,7 @@ struct RunResult {
   std::string last_checkpoint;
   std::string failure;  // the guard's message when unstable
   std::string space;    // host or device
+  RunTiming timing;
 };
 
 class MpiExchange;

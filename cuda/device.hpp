@@ -21,6 +21,8 @@ bool compiled_with_cuda();
 std::vector<GpuInfo> list_gpus(std::string* why = nullptr);
 // Selects the GPU for this process (node-local rank modulo the device count).
 void select_device(int index);
+// The selected GPU's index (-1 without CUDA or GPU).
+int current_device();
 
 // Raw device memory, used by Buffer<T, Device>.
 void* device_alloc(std::size_t bytes);

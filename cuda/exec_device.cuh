@@ -5,6 +5,7 @@
 #include <cuda_runtime.h>
 
 #include <cstdint>
+#include <vector>
 
 #include "core/exec.hpp"
 #include "cuda/device_buffer.hpp"
@@ -82,6 +83,55 @@ T reduce(Device, Index n, const F& f) {
 inline void fence(Device) {
   detail::check_cuda(cudaDeviceSynchronize(), "fence");
 }
+
+// Phase timing on the device (core/exec.hpp): each mark records a CUDA event on the default
+// stream, the one every kernel and copy here uses, so the time between two marks is the device's
+// timeline between them, host work in the phase (halo staging) included. settle() waits for the
+// step's last event and reads the elapsed times; the events are then reused.
+template <>
+class PhaseClock<Device> {
+ public:
+  using Mark = int;
+  PhaseClock() = default;
+  PhaseClock(const PhaseClock&) = delete;
+  PhaseClock& operator=(const PhaseClock&) = delete;
+  ~PhaseClock() {
+    for (cudaEvent_t e : events_) cudaEventDestroy(e);
+  }
+  Mark mark() {
+    if (used_ == events_.size()) {
+      cudaEvent_t e;
+      detail::check_cuda(cudaEventCreate(&e), "cudaEventCreate (phase clock)");
+      events_.push_back(e);
+    }
+    detail::check_cuda(cudaEventRecord(events_[used_], 0), "cudaEventRecord (phase clock)");
+    return Mark(used_++);
+  }
+  void add(double& acc, Mark a, Mark b) { pending_.push_back(Pending{&acc, a, b}); }
+  void settle() {
+    if (!pending_.empty()) {
+      detail::check_cuda(cudaEventSynchronize(events_[used_ - 1]), "cudaEventSynchronize");
+      for (const Pending& p : pending_) {
+        float ms = 0;
+        detail::check_cuda(
+            cudaEventElapsedTime(&ms, events_[std::size_t(p.a)], events_[std::size_t(p.b)]),
+            "cudaEventElapsedTime");
+        *p.acc += double(ms) * 1e-3;
+      }
+      pending_.clear();
+    }
+    used_ = 0;
+  }
+
+ private:
+  struct Pending {
+    double* acc;
+    Mark a, b;
+  };
+  std::vector<cudaEvent_t> events_;
+  std::vector<Pending> pending_;
+  std::size_t used_ = 0;
+};
 
 void sort_pairs_stable(Device, std::uint64_t* keys, std::uint32_t* values, Index n,
                        std::uint64_t max_key);

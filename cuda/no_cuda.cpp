@@ -19,6 +19,9 @@ namespace {
 void select_device(int) {
   unavailable();
 }
+int current_device() {
+  return -1;
+}
 void* device_alloc(std::size_t) {
   unavailable();
 }

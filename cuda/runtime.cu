@@ -61,6 +61,15 @@ void select_device(int index) {
   check_cuda(cudaSetDevice(index), "cudaSetDevice");
 }
 
+int current_device() {
+  int d = -1;
+  if (cudaGetDevice(&d) != cudaSuccess) {
+    cudaGetLastError();
+    return -1;
+  }
+  return d;
+}
+
 // Device memory goes through a small caching pool: the solver's per-step scratch (sort buffers,
 // permutation scratch, reduction partials) would otherwise cost a cudaMalloc and a synchronising
 // cudaFree every step, which measured 3-4 ms of a 1 M particle step on an H200. A freed block is

@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <chrono>
 #include <cstdint>
 #include <cstring>
 #include <limits>
@@ -86,6 +87,23 @@ void for_each_uneven(Host, Index n, const F& f) {
 #pragma omp parallel for schedule(dynamic, kUnevenChunk)
   for (Index i = 0; i < n; ++i) f(i);
 }
+
+// Phase timing (`sphdem bench`): mark() at each phase boundary, add(acc, a, b) adds the seconds
+// from mark a to mark b to `acc`, settle() makes every added time final (once per step). The
+// host reads a steady clock, final at once; the device records CUDA events (cuda/exec_device.cuh).
+template <class Space>
+class PhaseClock;
+
+template <>
+class PhaseClock<Host> {
+ public:
+  using Mark = std::chrono::steady_clock::time_point;
+  Mark mark() const { return std::chrono::steady_clock::now(); }
+  void add(double& acc, Mark a, Mark b) const {
+    acc += std::chrono::duration<double>(b - a).count();
+  }
+  void settle() const {}
+};
 
 // Waits until the space's queued work is done; phase timers read the clock after it (Host: no-op).
 inline void fence(Host) {}

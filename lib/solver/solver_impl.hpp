@@ -52,12 +52,9 @@ class Solver final : public SolverBase {
   Index removed_count() const override { return removed_; }
   Real removed_mass() const override { return removed_mass_; }
   const PhaseTimes& phase_times() const override { return times_; }
-  // Phase clock: the space's queued work is finished first, so device kernels count in the phase
-  // that launched them (the host's fence is a no-op).
-  static std::chrono::steady_clock::time_point tick() {
-    fence(Space{});
-    return std::chrono::steady_clock::now();
-  }
+  // Phase clock (PhaseClock in core/exec.hpp; CUDA events on the device): a mark at each phase
+  // boundary, the times made final at the end of each step.
+  typename PhaseClock<Space>::Mark tick() { return clock_.mark(); }
 
   const ParticleSet<Host>& host_particles() override {
     if constexpr (std::is_same_v<Space, Host>) {
@@ -78,7 +75,7 @@ class Solver final : public SolverBase {
     if (!ex_) {
       st.removed = remove_and_wrap();
       sort_fluid();
-      times_.cell_list += std::chrono::duration<double>(tick() - t0).count();
+      clock_.add(times_.cell_list, t0, tick());
     } else if (need_rebuild()) {
       // Neighbour rebuild: leavers move, boxes may be rebalanced, a new halo plan is built.
       drop_halo();
@@ -95,24 +92,24 @@ class Solver final : public SolverBase {
       if (rebalanced) reselect_walls();
       sort_fluid();
       auto t1 = tick();
-      times_.cell_list += std::chrono::duration<double>(t1 - t0).count();
+      clock_.add(times_.cell_list, t0, t1);
       fill_halo();
       record_build();
       ++rebuilds_;
-      times_.halo += std::chrono::duration<double>(tick() - t1).count();
+      clock_.add(times_.halo, t1, tick());
     } else {
       // Between rebuilds: owned particles stay owned, the halo copies are refreshed in place.
       st.removed = remove_and_wrap();  // none: need_rebuild() saw none outside
       sort_fluid();
       follow(root_at_, fluid_cells_);
       auto t1 = tick();
-      times_.cell_list += std::chrono::duration<double>(t1 - t0).count();
+      clock_.add(times_.cell_list, t0, t1);
       refresh_halo(ps_.pos, true);
       refresh_halo(ps_.vel, false, HaloField::kVelocity);
       refresh_halo(ps_.rho);
       sort_range(ps_.n_fluid, ps_.n_halo, halo_cells_);
       follow(leaf_at_, halo_cells_);
-      times_.halo += std::chrono::duration<double>(tick() - t1).count();
+      clock_.add(times_.halo, t1, tick());
     }
 
     const bool symplectic = scene_.time.integrator == Integrator::kSymplectic;
@@ -138,7 +135,8 @@ class Solver final : public SolverBase {
     if (!p_.mdbc) {
       integrate_dbc_density(Space{}, v, ps_.wall_begin(), ps_.size(), dt, p_.eos);
     }
-    times_.integrate += std::chrono::duration<double>(tick() - t2).count();
+    clock_.add(times_.integrate, t2, tick());
+    clock_.settle();
     time_ += dt;
     ++step_;
     return st;
@@ -269,8 +267,8 @@ class Solver final : public SolverBase {
       }
     }
     auto t2 = tick();
-    times_.mdbc += std::chrono::duration<double>(t1 - t0).count();
-    times_.forces += std::chrono::duration<double>(t2 - t1).count();
+    clock_.add(times_.mdbc, t0, t1);
+    clock_.add(times_.forces, t1, t2);
   }
 
   // Time-step limits of Eq. (23) with the viscous limit; fills dt and the fluid extremes.
@@ -826,6 +824,7 @@ class Solver final : public SolverBase {
   Index removed_ = 0;
   Real removed_mass_ = 0;
   PhaseTimes times_;
+  PhaseClock<Space> clock_;
 };
 
 }  // namespace sphdem
