@@ -136,6 +136,7 @@ void run_bench(const BenchOptions& opt, std::ostream& os_rank) {
     ro.quiet = true;
     ro.handle_signals = false;
     const RunResult r = run_scene(scene, ro);
+    if (world_size() > 1) MPI_Barrier(MPI_COMM_WORLD);  // every rank is done with the folder
     if (temporary && world_rank() == 0) {
       std::error_code ec;
       std::filesystem::remove_all(ro.out_dir, ec);
