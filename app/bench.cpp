@@ -135,12 +135,16 @@ void run_bench(const BenchOptions& opt, std::ostream& os_rank) {
     ro.time_after_steps = opt.warmup;
     ro.quiet = true;
     ro.handle_signals = false;
+    // The temporary folder goes when the bench ends, by error too (rank 0 removes it).
+    struct Remove {
+      std::string path;
+      ~Remove() {
+        std::error_code ec;
+        if (!path.empty() && world_rank() == 0) std::filesystem::remove_all(path, ec);
+      }
+    } remove{temporary ? ro.out_dir : std::string()};
     const RunResult r = run_scene(scene, ro);
     if (world_size() > 1) MPI_Barrier(MPI_COMM_WORLD);  // every rank is done with the folder
-    if (temporary && world_rank() == 0) {
-      std::error_code ec;
-      std::filesystem::remove_all(ro.out_dir, ec);
-    }
     if (r.unstable)
       throw StabilityError("bench: scene '" + scene.name + "' went unstable: " + r.failure);
     if (r.timing.steps < opt.steps)
