@@ -122,6 +122,10 @@ void run_bench(const BenchOptions& opt, std::ostream& os_rank) {
     scene = load_scene(opt.scene_path, ov);
   }
 
+  if (!scene.dem.enabled && !opt.out_dir.empty())
+    throw InputError("--out '" + opt.out_dir + "': scene '" + scene.name + "' (" + scene.source +
+                     ") has no grains, and the bench writes a run folder only for scenes with "
+                     "grains; leave --out out");
   RunTiming t;
   std::string space, log_text;
   if (scene.dem.enabled) {
@@ -166,12 +170,7 @@ void run_bench(const BenchOptions& opt, std::ostream& os_rank) {
     if (std::string(solver->space_name()) == "device") cuda::synchronize();
     t.wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     t.steps = opt.steps;
-    const PhaseTimes& after = solver->phase_times();
-    t.solver.cell_list = after.cell_list - before.cell_list;
-    t.solver.mdbc = after.mdbc - before.mdbc;
-    t.solver.forces = after.forces - before.forces;
-    t.solver.integrate = after.integrate - before.integrate;
-    t.solver.halo = after.halo - before.halo;
+    t.solver = solver->phase_times() - before;
     t.pairs = solver->last_pair_count();
     t.fluid = solver->fluid_count();
     t.boundary = rep.wall + rep.grain;

@@ -28,13 +28,7 @@ RunTiming timing_since(const TimingMark& from, std::int64_t steps, const PhaseTi
   RunTiming t;
   t.steps = steps;
   t.wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - from.t).count();
-  const PhaseTimes& a = from.solver;
-  t.solver.cell_list = solver_now.cell_list - a.cell_list;
-  t.solver.halo = solver_now.halo - a.halo;
-  t.solver.mdbc = solver_now.mdbc - a.mdbc;
-  t.solver.forces = solver_now.forces - a.forces;
-  t.solver.integrate = solver_now.integrate - a.integrate;
-  t.solver.other = solver_now.other - a.other;
+  t.solver = solver_now - from.solver;
   t.loop.coupling = loop_now.coupling - from.loop.coupling;
   t.loop.dem = loop_now.dem - from.loop.dem;
   t.loop.io = loop_now.io - from.loop.io;

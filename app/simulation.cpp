@@ -780,8 +780,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
       r.timing = timing_since(mark, steps - opt.time_after_steps, solver->phase_times(), lt);
       r.timing.pairs = solver->last_pair_count();
       r.timing.fluid = solver->fluid_count();
-      const ParticleSet<Host>& hp = solver->host_particles();
-      r.timing.boundary = hp.n_wall + hp.n_grain;
+      r.timing.boundary = r.wall + r.grain;  // all ranks' (the build report)
       if (coupling) {
         r.timing.grains = Index(dem.system->bodies().size());
         r.timing.contacts = double(dem.system->contact_count());

@@ -30,6 +30,11 @@ struct StepStats {
 struct PhaseTimes {
   double cell_list = 0, halo = 0, mdbc = 0, forces = 0, integrate = 0, other = 0;
 };
+// The phase times between two readings of the totals.
+inline PhaseTimes operator-(const PhaseTimes& a, const PhaseTimes& b) {
+  return {a.cell_list - b.cell_list, a.halo - b.halo,           a.mdbc - b.mdbc,
+          a.forces - b.forces,       a.integrate - b.integrate, a.other - b.other};
+}
 
 // Everything beyond the particle fields that a bit-identical restart needs.
 struct SolverCounters {

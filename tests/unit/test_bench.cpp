@@ -9,6 +9,7 @@
 
 #include "app/bench.hpp"
 #include "core/error.hpp"
+#include "core/types.hpp"
 
 namespace sphdem {
 namespace {
@@ -93,6 +94,11 @@ TEST(Bench, CoupledSceneTimesFluidDemAndCoupling) {
         << p;
   }
   EXPECT_EQ(number(j, "model_bytes_per_step", "dem_contacts"), 0);
+  // Verlet streams 7 vectors and 5 scalars per fluid particle (position, velocity, previous
+  // velocity, density, previous density in and out; acceleration and density rate in).
+  // (The JSON has 6 significant digits.)
+  const double verlet = number(j, "fluid_particles") * 26 * double(sizeof(Real));
+  EXPECT_NEAR(number(j, "model_bytes_per_step", "integration"), verlet, 1e-5 * verlet);
   EXPECT_LE(phase_sum(j), number(j, "seconds_per_step") * (1 + 1e-9));
   // The run went to the given folder, as `sphdem run` would have written it.
   EXPECT_TRUE(std::filesystem::exists(tmp / "run.log"));
@@ -110,6 +116,18 @@ TEST(Bench, RefusesBadStepCountsAndAnEndBeforeTheSteps) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("--steps"), std::string::npos) << e.what();
   }
+  // A run folder for a fluid-only scene would never be written: refused, not ignored.
+  BenchOptions f;
+  f.scene_path = input("dam_break_2d.yaml");
+  f.out_dir = "unused_bench_folder";
+  try {
+    bench_json(f);
+    FAIL() << "--out on a fluid-only scene was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("--out"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("dam_break_2d"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(std::filesystem::exists("unused_bench_folder"));
   o.steps = 5;
   o.warmup = 0;
   o.overrides = {"time.end=1e-5"};  // a handful of DEM steps
