@@ -219,16 +219,29 @@ RunResult run_granular(const Scene& scene, const RunOptions& opt) {
   try {
     while (sys.time() < end - Real(1e-12) * end && (opt.max_steps < 0 || steps < opt.max_steps)) {
       if (steps == opt.time_after_steps) mark = {clock::now(), PhaseTimes{}, lt};
+      bool frame_now = false;
       timed(lt.io, [&] {
         if (sys.time() >= next_diag - Real(1e-12)) {
           write_diag();
           next_diag += scene.diagnostics.every;
+          // dem.stop_at_rest, checked at diagnostics times only: a restart (which resumes the
+          // same schedule) stops at the same step as a straight run.
+          const Real ke = sys.kinetic_energy();
+          if (scene.dem.stop_at_rest && sys.time() >= scene.dem.rest_after - Real(1e-12) &&
+              ke < scene.dem.rest_energy) {
+            r.at_rest = true;
+            log << "t = " << sys.time() << " s: at rest (kinetic energy " << ke << " J < "
+                << scene.dem.rest_energy << " J, dem.stop_at_rest); stopping\n";
+          }
         }
         if (frames && sys.time() >= next_frame - Real(1e-12)) {
           frames->write(sys.time(), node_particles(sys));
           next_frame += scene.frames.every;
+          frame_now = true;
         }
+        if (r.at_rest && frames && !frame_now) frames->write(sys.time(), node_particles(sys));
       });
+      if (r.at_rest) break;
       timed(lt.dem, [&] {
         // Moving walls and the packing drag.
         for (const std::string& gate : update_walls(scene, build, sys.time()))

@@ -65,6 +65,7 @@ void write_summary(const std::string& path, const Scene& scene, const RunResult&
     << "  \"last_checkpoint\": \"" << r.last_checkpoint << "\",\n"
     << "  \"status\": \""
     << (r.unstable ? "unstable" : (r.interrupted ? "interrupted" : "completed")) << "\"";
+  if (r.at_rest) f << ",\n  \"stopped_at_rest\": true";
   if (r.unstable) {
     std::string msg;
     for (char c : r.failure)

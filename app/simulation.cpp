@@ -414,6 +414,10 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
     if (scene.dem.heap)
       throw InputError(scene.source +
                        ": dem.heap: the heap measurement applies to grain-only runs");
+    if (scene.dem.stop_at_rest)
+      throw InputError(scene.source +
+                       ": dem.stop_at_rest: stopping at rest applies to grain-only runs (no "
+                       "fluid_blocks)");
     dem = build_dem(scene, slog);
     coupling = std::make_unique<GrainCoupling>(*dem.system, scene.sph.dp, boundary_depth(scene),
                                                scene.fluid.rho0, scene.dim);

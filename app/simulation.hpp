@@ -60,6 +60,7 @@ struct RunResult {
   double particle_steps_per_second = 0;
   bool unstable = false;
   bool interrupted = false;  // stopped by SIGTERM after writing a checkpoint
+  bool at_rest = false;      // grain-only runs: ended early by dem.stop_at_rest
   int checkpoints = 0;       // checkpoints written (emergency included)
   std::string last_checkpoint;
   std::string failure;  // the guard's message when unstable

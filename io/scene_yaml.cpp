@@ -984,7 +984,7 @@ void Parser::parse_dem(const Field& f) {
   if (dim_ != 3) fail(f, "DEM grains need dimension: 3");
   MapReader m = map(f, {"grain_grain", "grain_wall", "stiffness_overlap", "nodes_per_contact",
                         "dt_factor", "overlap_max", "settle", "shapes", "packs", "bodies", "walls",
-                        "heap", "substeps_max", "subcycle"});
+                        "heap", "stop_at_rest", "substeps_max", "subcycle"});
   d.grain_grain = parse_contact(m.require("grain_grain"), false);
   d.grain_wall = parse_contact(m.require("grain_wall"), true);
   d.stiffness_overlap = m.number("stiffness_overlap", left_open(0, 1), d.stiffness_overlap);
@@ -1005,6 +1005,12 @@ void Parser::parse_dem(const Field& f) {
     d.heap_x_min = hm.number("x_min", kCoord, -1e6);
     d.heap_x_max = hm.number("x_max", kCoord, 1e6);
     d.heap_origin = hm.number("origin", kCoord, d.heap_origin);
+  }
+  if (auto r = m.find("stop_at_rest")) {
+    MapReader rm = map(*r, {"after", "kinetic_energy"});
+    d.stop_at_rest = true;
+    d.rest_after = rm.number("after", closed(0, 1e6), d.rest_after);
+    d.rest_energy = rm.number("kinetic_energy", left_open(0, 1e6));
   }
   std::map<std::string, std::string> shape_names;
   for (const Field& item : list(m.require("shapes"))) {

@@ -1,29 +1,46 @@
 #!/usr/bin/env bash
-# LS-DEM resolution study (issue #5): the small rock collapse (mini_collapse.yaml) at the
-# default node and grid spacing with three pack seeds (the run-to-run spread), then with the node
-# spacing and the phi-grid spacing each made 1.5x coarser and 1.5x finer.
-# Usage: jobs/dem_sensitivity/run.sh OUTDIR [PARALLEL]   -> OUTDIR/summary.csv
+# LS-DEM studies on the small rock collapse (mini_collapse.yaml), issue #5.
+#   resolution (default): the default node and grid spacing with three pack seeds (the
+#     run-to-run spread), then the node spacing and the phi-grid spacing each made 1.5x coarser
+#     and 1.5x finer ("how results change with node count and grid spacing");
+#   friction: the grain-grain and grain-wall friction coefficients, from Table 2's 0.1 up, at the
+#     default resolution (how much of the repose angle comes from the shape, how much from mu).
+# Usage: jobs/dem_sensitivity/run.sh OUTDIR [PARALLEL] [resolution|friction]
+#   -> OUTDIR/summary.csv
 # One OpenMP thread per run; PARALLEL runs at a time (default 1).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 out=${1:?output folder}
 par=${2:-1}
+study=${3:-resolution}
 bin=${SPHDEM:-build/sphdem}
 mkdir -p "$out"
-cases="default_s3:0.0018:0.0006:3 default_s4:0.0018:0.0006:4 default_s5:0.0018:0.0006:5
-nodes_coarse:0.0027:0.0006:3 nodes_fine:0.0012:0.0006:3
-grid_coarse:0.0018:0.0009:3 grid_fine:0.0018:0.0004:3"
+# name:node_spacing:grid_spacing:seed:mu_grain_grain:mu_grain_wall
+case "$study" in
+  resolution)
+    cases="default_s3:0.0018:0.0006:3:0.5:0.5 default_s4:0.0018:0.0006:4:0.5:0.5
+default_s5:0.0018:0.0006:5:0.5:0.5 nodes_coarse:0.0027:0.0006:3:0.5:0.5
+nodes_fine:0.0012:0.0006:3:0.5:0.5 grid_coarse:0.0018:0.0009:3:0.5:0.5
+grid_fine:0.0018:0.0004:3:0.5:0.5" ;;
+  friction)
+    cases="mu0.1_0.1_s3:0.0018:0.0006:3:0.1:0.1 mu0.1_0.1_s4:0.0018:0.0006:4:0.1:0.1
+mu0.3_0.3_s3:0.0018:0.0006:3:0.3:0.3 mu0.7_0.7_s3:0.0018:0.0006:3:0.7:0.7
+mu0.1_0.5_s3:0.0018:0.0006:3:0.1:0.5 mu0.5_0.1_s3:0.0018:0.0006:3:0.5:0.1
+mu0.5_0.5_s3:0.0018:0.0006:3:0.5:0.5" ;;
+  *) echo "run.sh: unknown study '$study' (resolution or friction)" >&2; exit 2 ;;
+esac
 one() {
-  IFS=: read -r name ns gs seed <<<"$1"
+  IFS=: read -r name ns gs seed mgg mgw <<<"$1"
   OMP_NUM_THREADS=1 "$bin" run jobs/dem_sensitivity/mini_collapse.yaml --out "$out/$name" --quiet \
     --set "dem.shapes[0].node_spacing=$ns" --set "dem.shapes[0].grid_spacing=$gs" \
-    --set "dem.packs[0].seed=$seed" > /dev/null 2>&1 || true
+    --set "dem.packs[0].seed=$seed" --set "dem.grain_grain.friction=$mgg" \
+    --set "dem.grain_wall.friction=$mgw" > /dev/null 2>&1 || true
 }
 export -f one; export out bin
 printf '%s\n' $cases | xargs -P "$par" -I{} bash -c 'one {}'
-echo "case,node_spacing_m,grid_spacing_m,seed,nodes_mean,repose_deg,runout_m,height_m,ke_final_J,status,wall_s" > "$out/summary.csv"
+echo "case,node_spacing_m,grid_spacing_m,seed,mu_grain_grain,mu_grain_wall,nodes_mean,repose_deg,runout_m,height_m,ke_final_J,status,wall_s" > "$out/summary.csv"
 for c in $cases; do
-  IFS=: read -r name ns gs seed <<<"$c"
+  IFS=: read -r name ns gs seed mgg mgw <<<"$c"
   d="$out/$name"
   nodes=$(grep -o '[0-9]* nodes (spacing' "$d/run.log" | awk '{s+=$1; n++} END {if (n) printf "%.1f", s/n}')
   heap=$(grep '^heap:' "$d/run.log" | tail -1)
@@ -33,6 +50,6 @@ for c in $cases; do
   ke=$(tail -1 "$d/grains.csv" | cut -d, -f2)
   st=$(sed -n 's/.*"status": "\([a-z]*\)".*/\1/p' "$d/summary.json")
   wall=$(sed -n 's/.*"wall_seconds": \([0-9.e]*\).*/\1/p' "$d/summary.json")
-  echo "$name,$ns,$gs,$seed,$nodes,$ang,$ro,$ht,$ke,$st,$wall" >> "$out/summary.csv"
+  echo "$name,$ns,$gs,$seed,$mgg,$mgw,$nodes,$ang,$ro,$ht,$ke,$st,$wall" >> "$out/summary.csv"
 done
 cat "$out/summary.csv"

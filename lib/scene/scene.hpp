@@ -315,6 +315,11 @@ struct DemScene {
   // in x, and the x from which the run-out is measured (the baffle).
   bool heap = false;
   Real heap_floor = 0, heap_x_min = -1e30, heap_x_max = 1e30, heap_origin = 0;
+  // Grain-only runs: end the run once the grains are at rest (as LAMMPS' fix halt on ke): at a
+  // diagnostics time t >= rest_after, the grains' total kinetic energy below rest_energy [J].
+  // The check holds no state of its own, so a restarted run stops where a straight one does.
+  bool stop_at_rest = false;
+  Real rest_after = 0, rest_energy = 0;
 };
 
 // A uniform mean pressure gradient G [Pa/m] added to the computed pressure field. A periodic axis

@@ -148,6 +148,53 @@ diagnostics: {every: 0.01}
   EXPECT_LT(ke_late, 1e-10) << "the pile does not come to rest";
 }
 
+// dem.stop_at_rest ends a run at the first diagnostics time t >= after at which the grains'
+// kinetic energy is below the threshold (as LAMMPS' fix halt on ke): never before `after`, never
+// at a row still above the threshold, and not later than the first row that qualifies. The
+// check keeps no state, so a run restarted from a checkpoint taken before that time stops at the
+// same row. A run that stops at rest still writes its final frame and a completed summary.
+std::string replace(std::string s, const std::string& from, const std::string& to);
+
+TEST(GranularRun, StopsAtRestAtTheFirstQuietDiagnosticsTime) {
+  const double after = 0.35, threshold = 1e-7;
+  std::string text = replace(kPile, "time: {end: 0.6}", "time: {end: 5.0}");
+  text = replace(text, "  walls:\n",
+                 "  stop_at_rest: {after: 0.35, kinetic_energy: 1.0e-7}\n  walls:\n");
+  const Scene s = load_scene(write_scene("pile_rest", text));
+  const RunResult r = run(s, "pile_rest");
+  ASSERT_FALSE(r.unstable) << r.failure;
+  EXPECT_TRUE(r.at_rest);
+  EXPECT_FALSE(r.interrupted);
+  EXPECT_GE(r.sim_time, after - 1e-9);
+  EXPECT_LT(r.sim_time, 5.0 - 1.0) << "the pile should be at rest long before time.end";
+  const auto rows = runfiles::read_numeric_csv("pile_rest/grains.csv");
+  ASSERT_GT(rows.size(), 10u);
+  const auto& last = rows.back();
+  EXPECT_NEAR(last[0], r.sim_time, 1e-9);
+  EXPECT_LT(last[1], threshold);
+  int before_quiet = 0;  // rows after `after` that were still moving
+  for (std::size_t i = 0; i + 1 < rows.size(); ++i)
+    if (rows[i][0] >= after - 1e-9) {
+      EXPECT_GE(rows[i][1], threshold) << "row at t = " << rows[i][0] << " was already at rest";
+      ++before_quiet;
+    }
+  std::printf("pile at rest at t = %.3f s (kinetic energy %.3e J), %d moving rows after %.2f s\n",
+              last[0], last[1], before_quiet, after);
+  const std::string summary = runfiles::slurp("pile_rest/summary.json");
+  EXPECT_NE(summary.find("\"status\": \"completed\""), std::string::npos) << summary;
+  EXPECT_NE(summary.find("\"stopped_at_rest\": true"), std::string::npos) << summary;
+  bool said = false;
+  for (const auto& l : lines("pile_rest/run.log")) said = said || l.find("at rest") != l.npos;
+  EXPECT_TRUE(said) << "run.log should say why the run ended";
+  // Through a checkpoint at step 400 (t = 0.26 s, before `after`): the same last row.
+  const RunResult a = run(s, "pile_rest_split", 450);
+  ASSERT_FALSE(a.at_rest);
+  const RunResult b = run(s, "pile_rest_split", -1, checkpoint_path("pile_rest_split", 400));
+  EXPECT_TRUE(b.at_rest);
+  EXPECT_EQ(b.sim_time, r.sim_time);
+  EXPECT_EQ(lines("pile_rest/grains.csv"), lines("pile_rest_split/grains.csv"));
+}
+
 // Runs `text` 600 steps straight and 400 + 200 through a checkpoint; the two must agree bit for
 // bit (bodies, contact history, grains.csv). The split run's first leg goes on to step 500 past
 // its step-400 checkpoint, as a job killed between checkpoints does: the restart from 400 must
@@ -305,6 +352,29 @@ TEST(GranularRun, BadInputIsNamed) {
   expect_input_error(
       replace(kPile, "  nodes_per_contact: 3\n", "  nodes_per_contact: 3\n  subcycle: false\n"),
       "dem.subcycle");
+  expect_input_error(replace(kPile, "  walls:\n", "  stop_at_rest: {after: 0.3}\n  walls:\n"),
+                     "dem.stop_at_rest.kinetic_energy");
+  expect_input_error(
+      replace(kPile, "  walls:\n", "  stop_at_rest: {kinetic_energy: -1}\n  walls:\n"),
+      "dem.stop_at_rest.kinetic_energy");
+}
+
+// Keys of grain-only runs are refused in a coupled scene, not ignored.
+TEST(GranularRun, StopAtRestIsRefusedWithAFluid) {
+  const std::string src =
+      runfiles::slurp(std::string(SPHDEM_SOURCE_DIR) + "/inputs/floating_box.yaml");
+  const auto at = src.find("\ndem:\n");
+  ASSERT_NE(at, std::string::npos);
+  std::string text = src;
+  text.insert(at + 6, "  stop_at_rest: {kinetic_energy: 1e-9}\n");
+  const std::string path = write_scene("box_rest", text);
+  try {
+    const Scene s = load_scene(path);
+    run(s, "box_rest", 1);
+    ADD_FAILURE() << "dem.stop_at_rest accepted in a coupled scene";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("dem.stop_at_rest"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace
