@@ -226,9 +226,10 @@ RunResult run_granular(const Scene& scene, const RunOptions& opt) {
           next_diag += scene.diagnostics.every;
           // dem.stop_at_rest, checked at diagnostics times only: a restart (which resumes the
           // same schedule) stops at the same step as a straight run.
-          const Real ke = sys.kinetic_energy();
-          if (scene.dem.stop_at_rest && sys.time() >= scene.dem.rest_after - Real(1e-12) &&
-              ke < scene.dem.rest_energy) {
+          const Real ke = scene.dem.stop_at_rest && sys.time() >= scene.dem.rest_after - Real(1e-12)
+                              ? sys.kinetic_energy()
+                              : Real(-1);
+          if (ke >= 0 && ke < scene.dem.rest_energy) {
             r.at_rest = true;
             log << "t = " << sys.time() << " s: at rest (kinetic energy " << ke << " J < "
                 << scene.dem.rest_energy << " J, dem.stop_at_rest); stopping\n";

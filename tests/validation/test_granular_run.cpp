@@ -186,10 +186,16 @@ TEST(GranularRun, StopsAtRestAtTheFirstQuietDiagnosticsTime) {
   bool said = false;
   for (const auto& l : lines("pile_rest/run.log")) said = said || l.find("at rest") != l.npos;
   EXPECT_TRUE(said) << "run.log should say why the run ended";
-  // Through a checkpoint at step 400 (t = 0.26 s, before `after`): the same last row.
-  const RunResult a = run(s, "pile_rest_split", 450);
+  // The last frame is the state at rest.
+  const std::string xdmf = runfiles::slurp("pile_rest/frames.xdmf");
+  const auto tv = xdmf.rfind("Time Value=\"");
+  ASSERT_NE(tv, std::string::npos);
+  EXPECT_NEAR(std::stod(xdmf.substr(tv + 12)), r.sim_time, 1e-5);
+  // Through a checkpoint at step 12,000 (t = 0.3275 s: after the settling drag, before `after`):
+  // the same last row.
+  const RunResult a = run(s, "pile_rest_split", 12100);
   ASSERT_FALSE(a.at_rest);
-  const RunResult b = run(s, "pile_rest_split", -1, checkpoint_path("pile_rest_split", 400));
+  const RunResult b = run(s, "pile_rest_split", -1, checkpoint_path("pile_rest_split", 12000));
   EXPECT_TRUE(b.at_rest);
   EXPECT_EQ(b.sim_time, r.sim_time);
   EXPECT_EQ(lines("pile_rest/grains.csv"), lines("pile_rest_split/grains.csv"));
