@@ -372,10 +372,6 @@ geom::SdfPtr make_ellipsoid_sdf(Vec3 a) {
 
 // ---- templates -------------------------------------------------------------------------------
 
-Real GrainTemplate::equivalent_diameter() const {
-  return std::cbrt(Real(6) * volume_ / kPi);
-}
-
 GrainTemplate GrainTemplate::from_sdf(const geom::Sdf& sdf, const std::vector<Vec3>& src_nodes,
                                       const TemplateOptions& opt, bool is_sphere,
                                       Real sphere_radius) {
@@ -455,6 +451,7 @@ GrainTemplate GrainTemplate::from_sdf(const geom::Sdf& sdf, const std::vector<Ve
     t.tensor_ = mat3_identity();
     for (int a = 0; a < 3; ++a) t.tensor_.m[a][a] = i0;
   }
+  t.d_eq_ = std::cbrt(Real(6) * t.volume_ / kPi);  // every pair law reads it
   symmetric_eigen(t.tensor_, &t.inertia_, &t.rotation_);
   if (is_sphere) t.rotation_ = mat3_identity();
 

@@ -99,7 +99,7 @@ class GrainTemplate {
   Real radius() const { return radius_; }                    // sphere radius (spheres only)
   Real bounding_radius() const { return bounding_radius_; }  // max |node| (body frame), or R
   Real volume() const { return volume_; }
-  Real equivalent_diameter() const;  // (6 V / pi)^{1/3}
+  Real equivalent_diameter() const { return d_eq_; }  // (6 V / pi)^{1/3}
   // Principal moments of inertia per unit density (multiply by rho), ascending.
   Vec3 inertia_per_density() const { return inertia_; }
   // The source frame of the shape seen from the body frame: x_source = centroid + R x_body.
@@ -123,7 +123,7 @@ class GrainTemplate {
  private:
   void group_nodes();  // node_order_ and groups_ from nodes_
   bool is_sphere_ = false;
-  Real radius_ = 0, bounding_radius_ = 0, volume_ = 0;
+  Real radius_ = 0, bounding_radius_ = 0, volume_ = 0, d_eq_ = 0;
   Vec3 inertia_, centroid_;
   Mat3 rotation_{}, tensor_{};
   std::vector<Vec3> nodes_;

@@ -59,10 +59,11 @@ SPHDEM_HD inline Vec3 grid_clamp(const GridSdfView& g, const Vec3& x) {
   return c;
 }
 
-// Trilinear value and its exact gradient (d/dx of the interpolant) at a point xc inside the grid
-// box. The gradient is the one-sided derivative of the cell that holds xc.
-SPHDEM_HD inline void grid_trilinear(const GridSdfView& g, const Vec3& xc, Real* value,
-                                     Vec3* gradient) {
+// Trilinear value and, with kGradient, its exact gradient (d/dx of the interpolant) at a point
+// xc inside the grid box. The gradient is the one-sided derivative of the cell that holds xc.
+// The value is summed in the same order either way, so the two forms agree to the bit.
+template <bool kGradient>
+SPHDEM_HD inline Real grid_interpolate(const GridSdfView& g, const Vec3& xc, Vec3* gradient) {
   int i0[3];
   Real t[3];
   grid_locate(g, xc, i0, t);
@@ -77,12 +78,24 @@ SPHDEM_HD inline void grid_trilinear(const GridSdfView& g, const Vec3& xc, Real*
     const Real w1 = b1 ? t[1] : Real(1) - t[1];
     const Real w2 = b2 ? t[2] : Real(1) - t[2];
     v += f * w0 * w1 * w2;
-    gr.x += f * (b0 ? Real(1) : Real(-1)) * w1 * w2;
-    gr.y += f * (b1 ? Real(1) : Real(-1)) * w0 * w2;
-    gr.z += f * (b2 ? Real(1) : Real(-1)) * w0 * w1;
+    if constexpr (kGradient) {
+      gr.x += f * (b0 ? Real(1) : Real(-1)) * w1 * w2;
+      gr.y += f * (b1 ? Real(1) : Real(-1)) * w0 * w2;
+      gr.z += f * (b2 ? Real(1) : Real(-1)) * w0 * w1;
+    }
   }
-  *value = v;
-  *gradient = gr * g.inv_spacing;
+  if constexpr (kGradient) *gradient = gr * g.inv_spacing;
+  return v;
+}
+
+SPHDEM_HD inline void grid_trilinear(const GridSdfView& g, const Vec3& xc, Real* value,
+                                     Vec3* gradient) {
+  *value = grid_interpolate<true>(g, xc, gradient);
+}
+
+// The distance from x to its clamped point c; zero, without a square root, inside the box.
+SPHDEM_HD inline Real grid_outside(const Vec3& x, const Vec3& c) {
+  return x.x == c.x && x.y == c.y && x.z == c.z ? Real(0) : norm(x - c);
 }
 
 }  // namespace detail
@@ -91,10 +104,7 @@ SPHDEM_HD inline void grid_trilinear(const GridSdfView& g, const Vec3& xc, Real*
 // nearest point of the box plus the distance to the box, so phi keeps growing far away.
 SPHDEM_HD inline Real grid_phi(const GridSdfView& g, const Vec3& x) {
   const Vec3 c = detail::grid_clamp(g, x);
-  Real v;
-  Vec3 gr;
-  detail::grid_trilinear(g, c, &v, &gr);
-  return v + norm(x - c);
+  return detail::grid_interpolate<false>(g, c, nullptr) + detail::grid_outside(x, c);
 }
 
 // The gradient of grid_phi at x (not normalised): the derivative of the trilinear interpolant
