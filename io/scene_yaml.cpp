@@ -1127,7 +1127,7 @@ void Parser::parse_dem(const Field& f) {
   }
   if (auto w = m.find("walls")) {
     for (const Field& item : list(*w)) {
-      MapReader wm = map(item, {"solid", "velocity", "start", "stop"});
+      MapReader wm = map(item, {"solid", "velocity", "start", "stop", "friction", "restitution"});
       GrainWall gw;
       Field f_s = wm.require("solid");
       gw.solid = string(f_s);
@@ -1143,6 +1143,9 @@ void Parser::parse_dem(const Field& f) {
       Field f_stop = wm.find("stop") ? *wm.find("stop") : item;
       gw.stop = wm.number("stop", closed(0, 1e30), gw.stop);
       if (gw.stop <= gw.start) fail(f_stop, "stop must be after start (" + fmt(gw.start) + ")");
+      // Per-wall contact material, in place of grain_wall's (its stiffness stays: it sets dt).
+      gw.friction = wm.number("friction", closed(0, 10), gw.friction);
+      gw.restitution = wm.number("restitution", left_open(0, 1), gw.restitution);
       d.walls.push_back(gw);
     }
   }

@@ -143,6 +143,22 @@ int DemSystem::add_sdf_wall(geom::SdfPtr sdf, Vec3 velocity) {
   return int(walls_.size()) - 1;
 }
 
+void DemSystem::set_wall_contact(int w, Real mu, Real restitution) {
+  if (w < 0 || std::size_t(w) >= walls_.size())
+    throw InputError("DEM: no wall " + std::to_string(w));
+  if (!(mu < 0) && !(mu >= 0)) throw InputError("DEM: a wall's friction coefficient is NaN");
+  if (restitution >= 0 && !(restitution > 0 && restitution <= 1))
+    throw InputError("DEM: a wall's restitution coefficient must be in (0, 1], got " +
+                     std::to_string(restitution));
+  Wall& wall = walls_[std::size_t(w)];
+  wall.mu = mu < 0 ? Real(-1) : mu;
+  wall.restitution = restitution < 0 ? Real(-1) : restitution;
+  if (wall.restitution > 0) {
+    wall.zeta = damping_ratio_from_restitution(wall.restitution);
+    wall.alpha = hertz_damping_alpha(wall.restitution);
+  }
+}
+
 void DemSystem::set_external(std::size_t i, Vec3 f, Vec3 t) {
   ext_force_.at(i) = f;
   ext_torque_.at(i) = t;
@@ -187,6 +203,21 @@ PairLaw DemSystem::pair_law(const RigidBody& a, const RigidBody& b, bool wall) c
   const Real zeta = wall ? zeta_gw_ : zeta_gg_;  // damping_ratio_from_restitution(m.restitution)
   p.cn = linear_damping_zeta(zeta, p.m_eff, p.kn);
   p.ct = m.tangential_damping ? linear_damping_zeta(zeta, p.m_eff, p.kt) : Real(0);
+  return p;
+}
+
+PairLaw DemSystem::wall_law(const PairLaw& base, const Wall& w) const {
+  PairLaw p = base;
+  if (w.mu >= 0) p.mu = w.mu;
+  if (w.restitution > 0) {
+    if (p.law == NormalLaw::kHertz) {
+      p.alpha = w.alpha;
+    } else {
+      p.cn = linear_damping_zeta(w.zeta, p.m_eff, p.kn);
+      p.ct = params_.grain_wall.tangential_damping ? linear_damping_zeta(w.zeta, p.m_eff, p.kt)
+                                                   : Real(0);
+    }
+  }
   return p;
 }
 
@@ -543,7 +574,7 @@ void DemSystem::compute_forces(Real dt) {
     whist[i].clear();
     if (b.motion == Motion::kFree) {
       const GrainTemplate& t = *templates_[std::size_t(b.shape)];
-      PairLaw law;
+      PairLaw base;
       bool have_law = false;  // worked out at the first wall within reach
       for (std::size_t w = 0; w < walls_.size(); ++w) {
         const Wall& wall = walls_[w];
@@ -551,9 +582,10 @@ void DemSystem::compute_forces(Real dt) {
         const Real phc = wall_phi(wall, b.x);
         if (phc > t.bounding_radius()) continue;
         if (!have_law) {
-          law = pair_law(b, b, true);
+          base = pair_law(b, b, true);
           have_law = true;
         }
+        const PairLaw law = wall_law(base, wall);
         const GlobalId wkey = kWallKeyBit | GlobalId(w);
         if (t.is_sphere()) {
           const Real d = t.radius() - phc;

@@ -85,6 +85,10 @@ struct Wall {
   Vec3 offset;         // SDF walls: phi(x) = sdf->phi(x - offset)
   Vec3 velocity;       // translation speed (a baffle lifted at a prescribed speed)
   bool active = true;  // false: touches no grain (a gate that has opened)
+  // This wall's own friction coefficient and restitution (DemSystem::set_wall_contact), in place
+  // of grain_wall's; negative: grain_wall's. The stiffness stays grain_wall's (it sets the step).
+  Real mu = -1, restitution = -1;
+  Real zeta = 0, alpha = 0;  // from restitution: linear damping ratio, Hertz damping constant
 };
 
 // Everything a bit-identical restart needs beyond what the scene rebuilds (templates, parameters,
@@ -126,6 +130,9 @@ class DemSystem {
                        Motion motion = Motion::kFree);
   int add_plane_wall(Vec3 point, Vec3 outward_normal, Vec3 velocity = {});
   int add_sdf_wall(geom::SdfPtr sdf, Vec3 velocity = {});
+  // Gives wall w its own friction coefficient (mu >= 0) and restitution (0 < e <= 1) for grain
+  // contacts; a negative value keeps grain_wall's. LAMMPS' fix wall/gran takes them per wall.
+  void set_wall_contact(int w, Real mu, Real restitution);
 
   std::vector<RigidBody>& bodies() { return bodies_; }
   const std::vector<RigidBody>& bodies() const { return bodies_; }
@@ -169,6 +176,8 @@ class DemSystem {
   void build_pair_list();
   bool pairs_stale() const;
   PairLaw pair_law(const RigidBody& a, const RigidBody& b, bool wall) const;
+  // A grain-wall law `base` (pair_law(b, b, true)) with wall w's own friction and restitution.
+  PairLaw wall_law(const PairLaw& base, const Wall& w) const;
   const Vec3* find_spring(const ContactKey& k) const;
   // hist_keys_ and the sphere pairs' springs merged, sorted by key.
   void merged_history(std::vector<ContactKey>& keys, std::vector<Vec3>& springs) const;

@@ -250,6 +250,7 @@ DemBuild build_dem(const Scene& scene, std::ostream& log) {
   for (const GrainWall& w : d.walls) {
     const Solid* s = scene.find_solid(w.solid);
     out.wall_index.push_back(sys.add_sdf_wall(s->sdf, wall_velocity(w, 0)));
+    sys.set_wall_contact(out.wall_index.back(), w.friction, w.restitution);
     out.wall_solid.push_back(s);
   }
   out.dt = scene.time.dt_fixed > 0 ? scene.time.dt_fixed : d.dt_factor * sys.time_step();

@@ -285,6 +285,8 @@ struct GrainWall {
   std::string solid;
   Vec3 velocity;
   Real start = 0, stop = 1e30;
+  // This wall's own contact friction and restitution; negative: grain_wall's.
+  Real friction = -1, restitution = -1;
 };
 
 struct ContactParams {

@@ -24,7 +24,9 @@ struct Slope {
   double v_end = 0, w_end = 0, z_end = 0;
 };
 
-Slope run_incline(bool sphere, Real theta_deg, Real mu) {
+// wall_mu >= 0: the plane carries its own friction coefficient (set_wall_contact) and
+// grain_wall's mu is set to `mu`, which the contact must then ignore.
+Slope run_incline(bool sphere, Real theta_deg, Real mu, Real wall_mu = -1) {
   const Real th = theta_deg * kPi / 180;
   DemParams p;
   p.gravity = Vec3(kG * std::sin(th), 0, -kG * std::cos(th));
@@ -35,7 +37,8 @@ Slope run_incline(bool sphere, Real theta_deg, Real mu) {
   p.grain_wall.tangential_damping = true;
   p.grain_grain = p.grain_wall;
   DemSystem sys(p);
-  sys.add_plane_wall(Vec3(0, 0, 0), Vec3(0, 0, 1));
+  const int plane = sys.add_plane_wall(Vec3(0, 0, 0), Vec3(0, 0, 1));
+  if (wall_mu >= 0) sys.set_wall_contact(plane, wall_mu, -1);
   const Real radius = 0.05, half_h = 0.025;
   if (sphere) {
     const int s = sys.add_template(GrainTemplate::sphere(radius));
@@ -90,6 +93,21 @@ TEST(DemIncline, BlockSlidesWithCoulombAcceleration) {
                 a_ref, std::fabs(s.a - a_ref) / a_ref);
     EXPECT_NEAR(s.a, a_ref, 0.01 * a_ref) << "theta " << theta << " mu " << mu;
   }
+}
+
+// The wall's own coefficient (dem.walls[i].friction) replaces grain_wall's: with grain_wall's
+// mu at 0.05 the block would slide at 4.48 m/s^2 on 30 deg, with the wall's 0.3 at 2.36.
+TEST(DemIncline, BlockSlidesWithTheWallsOwnFriction) {
+  const Real th = 30 * kPi / 180;
+  const double a_ref = kG * (std::sin(th) - 0.3 * std::cos(th));
+  const Slope s = run_incline(false, 30, 0.05, 0.3);
+  std::printf("block theta 30, grain_wall mu 0.05, wall mu 0.30: a %.5f m/s^2 (ref %.5f)\n", s.a,
+              a_ref);
+  EXPECT_NEAR(s.a, a_ref, 0.01 * a_ref);
+  // And it sticks at 20 deg on a wall of mu 0.5, though grain_wall's 0.05 would let it slide.
+  const Slope st = run_incline(false, 20, 0.05, 0.5);
+  EXPECT_LT(std::fabs(st.dx), 1e-6);
+  EXPECT_LT(std::fabs(st.v_end), 1e-5);
 }
 
 TEST(DemIncline, BlockSticksBelowTheFrictionAngle) {

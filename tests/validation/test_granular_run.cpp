@@ -363,6 +363,12 @@ TEST(GranularRun, BadInputIsNamed) {
   expect_input_error(
       replace(kPile, "  walls:\n", "  stop_at_rest: {kinetic_energy: -1}\n  walls:\n"),
       "dem.stop_at_rest.kinetic_energy");
+  expect_input_error(replace(kPile, "    - {solid: box}", "    - {solid: box, friction: -0.2}"),
+                     "dem.walls[0].friction");
+  expect_input_error(replace(kPile, "    - {solid: box}", "    - {solid: box, restitution: 0}"),
+                     "dem.walls[0].restitution");
+  expect_input_error(replace(kPile, "    - {solid: box}", "    - {solid: box, kn: 10}"),
+                     "dem.walls[0].kn");
 }
 
 // Keys of grain-only runs are refused in a coupled scene, not ignored.
