@@ -33,6 +33,9 @@ struct Load {
 // for_each on the host space, but a plain loop for short ranges: a parallel region costs more
 // than a few bodies' work, and much more when the cores are shared.
 constexpr Index kSerialBelow = 64;
+// A pair's node lists stay valid while no node has moved by more than this many node spacings
+// relative to the other grain (DemSystem::NodeList).
+constexpr Real kNodeListSkin = Real(0.25);
 // Dynamic schedule: contacts cluster (a pile's bottom grains, numbered first, have them all), so
 // equal static chunks leave one thread idle. Each item writes only its own slot, so the result
 // does not depend on the schedule. Chunks of n/(64 threads), at least 16: with chunks of 16 the
@@ -64,6 +67,7 @@ Vec3 wall_normal(const Wall& w, const Vec3& x) {
 struct DemSystem::PairOut {
   Load a, b;
   Real max_d = 0;
+  std::size_t lookups = 0, builds = 0;  // phi lookups and node lists remade
   std::vector<HistEntry> hist;
 };
 
@@ -287,7 +291,20 @@ void DemSystem::find_pairs() {
   // The sphere pairs' springs leave the old list for the history, and come back into the new
   // list by key (the rest of the history is found by key every step).
   merged_history(hist_keys_, hist_springs_);
+  const auto old_pairs = std::move(pairs_);
+  auto old_lists = std::move(node_lists_);
   build_pair_list();
+  // A pair that stays in the list keeps its node lists (both lists are in (i, j) order).
+  node_lists_.clear();
+  node_lists_.resize(pairs_.size());
+  if (old_lists.size() == old_pairs.size()) {
+    std::size_t o = 0;
+    for (std::size_t pi = 0; pi < pairs_.size(); ++pi) {
+      while (o < old_pairs.size() && old_pairs[o] < pairs_[pi]) ++o;
+      if (o < old_pairs.size() && old_pairs[o] == pairs_[pi])
+        node_lists_[pi] = std::move(old_lists[o]);
+    }
+  }
   pair_spring_.assign(pairs_.size(), Vec3());
   pair_touch_.assign(pairs_.size(), 0);
   for (std::size_t pi = 0; pi < pairs_.size(); ++pi) {
@@ -476,6 +493,8 @@ void DemSystem::compute_forces(Real dt) {
     out.a = Load{};
     out.b = Load{};
     out.max_d = 0;
+    out.lookups = 0;
+    out.builds = 0;
     out.hist.clear();
     const RigidBody& a = eval_[pairs_[std::size_t(pi)].first];
     const RigidBody& b = eval_[pairs_[std::size_t(pi)].second];
@@ -513,7 +532,7 @@ void DemSystem::compute_forces(Real dt) {
     const PairLaw law = pair_law(a, b, false);
     // Level-set master-slave test in both orders, each with weight 1/2.
     auto pass = [&](const RigidBody& m, const GrainTemplate& tm, std::size_t mi, const RigidBody& s,
-                    const GrainTemplate& ts, Load& load_m, Load& load_s) {
+                    const GrainTemplate& ts, Load& load_m, Load& load_s, NodeList& nl) {
       const geom::GridSdfView phi_s = ts.view();
       const Quat qs_inv = conjugate(s.q);
       const Real reach2 = ts.bounding_radius() * ts.bounding_radius();
@@ -522,46 +541,101 @@ void DemSystem::compute_forces(Real dt) {
                                                                  : pairs_[std::size_t(pi)].first;
       const Vec3 slo = box_lo_[si], shi = box_hi_[si];
       const Real rs = ts.bounding_radius();
+      // One node (y: its position in s's frame) against s: the contact test and force of a full
+      // scan. Returns phi at y; when the cheap tests (s's box and bounding sphere) rule the node
+      // out, phi is looked up only if `need_phi`, and +inf returned otherwise.
+      auto node = [&](std::size_t k, const Vec3& y, bool need_phi) {
+        const Vec3& x = wn[k];
+        const bool near = !(x.x < slo.x || x.x > shi.x || x.y < slo.y || x.y > shi.y ||
+                            x.z < slo.z || x.z > shi.z || norm2(x - s.x) > reach2);
+        if (!near && !need_phi) return std::numeric_limits<Real>::infinity();
+        ++out.lookups;
+        const Real ph = geom::grid_phi(phi_s, y);
+        if (!near || !(ph < 0)) return ph;
+        const Vec3 nb = geom::grid_normal(phi_s, y);
+        if (norm2(nb) == 0) return ph;
+        const Vec3 nrm = rotate(s.q, nb);
+        const Real d = -ph;
+        const Vec3 v_rel = point_velocity(m, x) - point_velocity(s, x);
+        const ContactKey key{m.id, s.id, std::uint32_t(k)};
+        const Vec3* old = find_spring(key);
+        Vec3 spring = old ? *old : Vec3();
+        const Real inv_m = inverse_point_mass(m, x, nrm) + inverse_point_mass(s, x, nrm);
+        const Vec3 f = Real(0.5) * contact_force(at_point_mass(law, Real(1) / inv_m), d, nrm, v_rel,
+                                                 dt, spring, nullptr);
+        load_m.add(f, x, m.x);
+        load_s.add(-f, x, s.x);
+        out.max_d = std::max(out.max_d, d);
+        out.hist.push_back({key, spring});
+        return ph;
+      };
+      // The node list stays valid while no node of m has moved by more than `skin` in s's frame
+      // since it was made: |dy| <= |dt_rel| + 2 sin(theta/2) |p| for a relative turn theta. A
+      // node left out had phi >= band = L skin then (L: phi's Lipschitz bound), so phi >= 0 now
+      // and it cannot touch: the list holds every node a full scan would find in contact.
+      const Real skin = kNodeListSkin * tm.node_spacing();
+      const Real band = ts.phi_lipschitz() * skin * Real(1.000001);  // margin for round-off
+      const Quat qrel = multiply(qs_inv, m.q);
+      const Vec3 trel = rotate(qs_inv, m.x - s.x);
+      if (node_lists_on_ && nl.valid) {
+        const Quat dq = multiply(qrel, conjugate(nl.q0));
+        const Real moved =
+            norm(trel - nl.t0) +
+            2 * std::sqrt(dq.x * dq.x + dq.y * dq.y + dq.z * dq.z) * tm.bounding_radius();
+        if (moved <= skin) {
+          for (std::uint32_t k : nl.nodes) node(k, rotate(qs_inv, wn[k] - s.x), false);
+          return;
+        }
+      }
+      // Full scan. With node lists it also makes the list: every node within `band` of s. Outside
+      // s's grid box phi >= phi_box_min + the distance to the box, so a node (or an octant) that
+      // far out is skipped; without lists the octants and nodes beyond s's bounding sphere or
+      // box are skipped (they cannot touch now).
+      const bool build = node_lists_on_;
+      const Vec3 glo = ts.grid_lo(), ghi = ts.grid_hi();
+      const Real box_reach = ts.phi_box_min() >= 0 ? band : std::numeric_limits<Real>::max();
+      auto box_dist = [&](const Vec3& y) {
+        const Vec3 c(std::clamp(y.x, glo.x, ghi.x), std::clamp(y.y, glo.y, ghi.y),
+                     std::clamp(y.z, glo.z, ghi.z));
+        return norm(y - c);
+      };
+      if (build) {
+        nl.nodes.clear();
+        nl.q0 = qrel;
+        nl.t0 = trel;
+        nl.valid = true;
+        ++out.builds;
+      }
       const std::uint32_t* order = tm.node_order().data();
       for (const NodeGroup& g : tm.node_groups()) {
-        // An octant whose nodes all lie beyond the other grain's bounding sphere or box is skipped
-        // (most of a grain faces away from any one neighbour).
         const Vec3 gc = m.x + rotate(m.q, g.centre);
-        const Real reach = g.radius + rs;
-        if (norm2(gc - s.x) > reach * reach) continue;
-        if (gc.x + g.radius < slo.x || gc.x - g.radius > shi.x || gc.y + g.radius < slo.y ||
-            gc.y - g.radius > shi.y || gc.z + g.radius < slo.z || gc.z - g.radius > shi.z)
-          continue;
+        if (build) {
+          if (box_dist(rotate(qs_inv, gc - s.x)) > g.radius + box_reach) continue;
+        } else {
+          // An octant whose nodes all lie beyond the other grain's bounding sphere or box is
+          // skipped (most of a grain faces away from any one neighbour).
+          const Real reach = g.radius + rs;
+          if (norm2(gc - s.x) > reach * reach) continue;
+          if (gc.x + g.radius < slo.x || gc.x - g.radius > shi.x || gc.y + g.radius < slo.y ||
+              gc.y - g.radius > shi.y || gc.z + g.radius < slo.z || gc.z - g.radius > shi.z)
+            continue;
+        }
         for (std::uint32_t gi = g.begin; gi < g.end; ++gi) {
           const std::size_t k = order[gi];
           const Vec3& x = wn[k];
-          if (x.x < slo.x || x.x > shi.x || x.y < slo.y || x.y > shi.y || x.z < slo.z ||
-              x.z > shi.z)
+          if (!build && (x.x < slo.x || x.x > shi.x || x.y < slo.y || x.y > shi.y || x.z < slo.z ||
+                         x.z > shi.z || norm2(x - s.x) > reach2))
             continue;
-          if (norm2(x - s.x) > reach2) continue;
           const Vec3 y = rotate(qs_inv, x - s.x);
-          const Real ph = geom::grid_phi(phi_s, y);
-          if (!(ph < 0)) continue;
-          const Vec3 nb = geom::grid_normal(phi_s, y);
-          if (norm2(nb) == 0) continue;
-          const Vec3 nrm = rotate(s.q, nb);
-          const Real d = -ph;
-          const Vec3 v_rel = point_velocity(m, x) - point_velocity(s, x);
-          const ContactKey key{m.id, s.id, std::uint32_t(k)};
-          const Vec3* old = find_spring(key);
-          Vec3 spring = old ? *old : Vec3();
-          const Real inv_m = inverse_point_mass(m, x, nrm) + inverse_point_mass(s, x, nrm);
-          const Vec3 f = Real(0.5) * contact_force(at_point_mass(law, Real(1) / inv_m), d, nrm,
-                                                   v_rel, dt, spring, nullptr);
-          load_m.add(f, x, m.x);
-          load_s.add(-f, x, s.x);
-          out.max_d = std::max(out.max_d, d);
-          out.hist.push_back({key, spring});
+          if (build && box_dist(y) > box_reach) continue;
+          const Real ph = node(k, y, build);
+          if (build && ph < band) nl.nodes.push_back(std::uint32_t(k));
         }
       }
     };
-    pass(a, ta, pairs_[std::size_t(pi)].first, b, tb, out.a, out.b);
-    pass(b, tb, pairs_[std::size_t(pi)].second, a, ta, out.b, out.a);
+    std::array<NodeList, 2>& lists = node_lists_[std::size_t(pi)];
+    pass(a, ta, pairs_[std::size_t(pi)].first, b, tb, out.a, out.b, lists[0]);
+    pass(b, tb, pairs_[std::size_t(pi)].second, a, ta, out.b, out.a, lists[1]);
   });
 
   // ---- per-body gather: walls, then the body's pairs in pair order ----
@@ -632,9 +706,12 @@ void DemSystem::compute_forces(Real dt) {
   // ---- new contact history, sorted by key ----
   all.clear();
   max_overlap_ = 0;
+  phi_lookups_ = 0;
   for (const PairOut& p : pout) {
     all.insert(all.end(), p.hist.begin(), p.hist.end());
     max_overlap_ = std::max(max_overlap_, p.max_d);
+    phi_lookups_ += p.lookups;
+    node_list_builds_ += p.builds;
   }
   for (std::size_t i = 0; i < n; ++i) {
     all.insert(all.end(), whist[i].begin(), whist[i].end());
@@ -696,6 +773,7 @@ void DemSystem::restore(const DemState& s) {
   bodies_ = s.bodies;
   pairs_built_at_.clear();  // the pair list is rebuilt from the restored positions
   pairs_.clear();           // and its springs come from the restored history
+  node_lists_.clear();
   pair_spring_.clear();
   pair_touch_.clear();
   acc_prev_ = s.acc_prev;

@@ -26,6 +26,7 @@
 // re-ordering, insertion and removal of bodies.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -160,6 +161,15 @@ class DemSystem {
   std::size_t pair_count() const { return pairs_.size(); }
   std::size_t pair_builds() const { return pair_builds_; }
   Real max_overlap() const { return max_overlap_; }  // of the last compute_forces
+  // Per-pair node lists (on by default): each grain pair keeps, for each of its two level-set
+  // passes, the nodes of one grain that lay within a band of the other's surface when the list
+  // was made, and tests only those while the pair's relative pose has not moved any node by more
+  // than the skin (see compute_forces). The forces are bit-identical either way; off, every
+  // step scans all nodes (tests compare the two).
+  void set_node_lists(bool on) { node_lists_on_ = on; }
+  // phi lookups in the level-set passes of the last compute_forces, and node lists remade.
+  std::size_t phi_lookups() const { return phi_lookups_; }
+  std::size_t node_list_builds() const { return node_list_builds_; }
   // The contact history (tangential springs) sorted by key, sphere pairs included.
   std::vector<ContactKey> history_keys() const;
   std::vector<Vec3> history_springs() const;
@@ -172,6 +182,14 @@ class DemSystem {
 
  private:
   struct PairOut;
+  // The nodes of grain m that may touch grain s in one pass of a pair, and the relative pose
+  // (s's frame) they were found at.
+  struct NodeList {
+    Quat q0;  // conj(q_s) q_m
+    Vec3 t0;  // conj(q_s) (x_m - x_s)
+    bool valid = false;
+    std::vector<std::uint32_t> nodes;  // in the order a full scan visits them
+  };
   void find_pairs();
   void build_pair_list();
   bool pairs_stale() const;
@@ -207,6 +225,9 @@ class DemSystem {
   // common case needs no search; a rebuild carries them to the new list by key. Every other
   // contact point (grain nodes, walls) is in hist_keys_/hist_springs_, sorted by key, rebuilt
   // each step. After a restore, hist_keys_ holds everything until the next pair build.
+  std::vector<std::array<NodeList, 2>> node_lists_;  // per pair: pass (a on b), pass (b on a)
+  bool node_lists_on_ = true;
+  std::size_t phi_lookups_ = 0, node_list_builds_ = 0;
   std::vector<Vec3> pair_spring_;
   std::vector<std::uint8_t> pair_touch_;
   std::vector<ContactKey> hist_keys_;  // sorted

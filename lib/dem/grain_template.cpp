@@ -486,7 +486,45 @@ GrainTemplate GrainTemplate::from_sdf(const geom::Sdf& sdf, const std::vector<Ve
         const Vec3 y = glo + Vec3(i * h, j * h, k * h);
         phi[i + nx * (j + ny * std::size_t(k))] = sdf.phi(c0 + matvec(r, y));
       }
+  t.grid_bounds();
   return t;
+}
+
+void GrainTemplate::grid_bounds() {
+  const int nx = n_[0], ny = n_[1], nz = n_[2];
+  const auto at = [&](int i, int j, int k) {
+    return phi_[std::size_t(i) + std::size_t(nx) * (std::size_t(j) + std::size_t(ny) * k)];
+  };
+  // In a cell, d/dx of the trilinear interpolant is bilinear in (ty, tz) and free of tx (and so
+  // on), so |grad|^2 is convex along each axis and peaks at a corner, where its components are
+  // the differences along the three edges that meet there.
+  Real l2max = 0;
+  const auto diff = [&](int d, int i, int j, int k) {  // along axis d from node (i, j, k)
+    if (n_[d] < 2) return Real(0);
+    const int e[3] = {d == 0, d == 1, d == 2};
+    return at(i + e[0], j + e[1], k + e[2]) - at(i, j, k);
+  };
+  for (int k = 0; k + 1 < std::max(nz, 2); ++k)
+    for (int j = 0; j + 1 < std::max(ny, 2); ++j)
+      for (int i = 0; i + 1 < std::max(nx, 2); ++i)
+        for (int c = 0; c < 8; ++c) {
+          // Corner (ci, cj, ck) of the cell; the edge along d that meets it starts at the cell's
+          // lower face in d and at the corner's position in the other two axes.
+          const int ci = std::min(i + (c & 1), nx - 1), cj = std::min(j + ((c >> 1) & 1), ny - 1),
+                    ck = std::min(k + ((c >> 2) & 1), nz - 1);
+          const Real gx = diff(0, i, cj, ck), gy = diff(1, ci, j, ck), gz = diff(2, ci, cj, k);
+          l2max = std::max(l2max, gx * gx + gy * gy + gz * gz);
+        }
+  // Outside the box phi = v(c) + |x - c| with c the nearest point of the box; a projection onto
+  // a convex set gives |dc|^2 + |d(x - c)|^2 <= |dx|^2, so phi is sqrt(Lv^2 + 1)-Lipschitz.
+  phi_lipschitz_ = std::sqrt(l2max / (spacing_ * spacing_) + 1);
+  Real bmin = std::numeric_limits<Real>::max();
+  for (int k = 0; k < nz; ++k)
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i)
+        if (i == 0 || j == 0 || k == 0 || i == nx - 1 || j == ny - 1 || k == nz - 1)
+          bmin = std::min(bmin, at(i, j, k));
+  phi_box_min_ = bmin;
 }
 
 GrainTemplate GrainTemplate::sphere(Real radius, const TemplateOptions& opt_in) {

@@ -116,12 +116,24 @@ class GrainTemplate {
     return geom::GridSdfView{lo_, spacing_, {n_[0], n_[1], n_[2]}, phi_.data(), Real(1) / spacing_};
   }
   const std::vector<Real>& phi_values() const { return phi_; }
+  // Bounds on geom::grid_phi over this grid, used to skip nodes that cannot reach the grain
+  // (DemSystem's per-pair node lists): |phi(x) - phi(x')| <= phi_lipschitz() |x - x'| everywhere
+  // (sqrt(L^2 + 1), L the interpolant's steepest gradient; the 1 is for the distance added
+  // outside the grid box), and
+  // phi(x) >= phi_box_min() + dist(x, grid box) outside the box (the least boundary value).
+  Real phi_lipschitz() const { return phi_lipschitz_; }
+  Real phi_box_min() const { return phi_box_min_; }
+  Vec3 grid_lo() const { return lo_; }
+  Vec3 grid_hi() const {
+    return lo_ + spacing_ * Vec3(Real(n_[0] - 1), Real(n_[1] - 1), Real(n_[2] - 1));
+  }
   Real grid_spacing() const { return spacing_; }
   Real node_spacing() const { return node_spacing_; }
   std::string describe() const;  // node count, grid size and spacing, volume, inertia
 
  private:
   void group_nodes();  // node_order_ and groups_ from nodes_
+  void grid_bounds();  // phi_lipschitz_ and phi_box_min_ from phi_
   bool is_sphere_ = false;
   Real radius_ = 0, bounding_radius_ = 0, volume_ = 0, d_eq_ = 0;
   Vec3 inertia_, centroid_;
@@ -130,7 +142,7 @@ class GrainTemplate {
   std::vector<std::uint32_t> node_order_;
   std::vector<NodeGroup> groups_;
   Vec3 lo_;
-  Real spacing_ = 0, node_spacing_ = 0;
+  Real spacing_ = 0, node_spacing_ = 0, phi_lipschitz_ = 0, phi_box_min_ = 0;
   int n_[3] = {1, 1, 1};
   std::vector<Real> phi_;
 };

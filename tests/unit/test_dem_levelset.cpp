@@ -276,6 +276,97 @@ TEST(DemSystemPairs, OctantSkippingMissesNoContactNode) {
   for (int c : seen) EXPECT_EQ(c, 1);
 }
 
+// The node lists skip a node only if geom::grid_phi cannot fall below zero there before the list
+// is remade. That rests on two bounds of the template: phi's Lipschitz constant and its least
+// value on the grid box's boundary. Random point pairs in and around a pyramid's grid must obey
+// both (brute force).
+TEST(DemSystemPairs, PhiBoundsHoldOnRandomPoints) {
+  const GrainTemplate t = GrainTemplate::trigonal_pyramid(0.01, 0.15, 7);
+  const geom::GridSdfView v = t.view();
+  const Real l = t.phi_lipschitz();
+  // sqrt(L^2 + 1) with L about 1 for a distance field (the grid's differences per spacing).
+  EXPECT_GT(l, std::sqrt(Real(2)) - 0.05);
+  EXPECT_LT(l, 2);
+  EXPECT_GT(t.phi_box_min(), 0) << "the grid is padded beyond the surface";
+  const Vec3 lo = t.grid_lo(), hi = t.grid_hi();
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<Real> u(-0.3, 1.3), step(-0.002, 0.002);
+  Real worst = 0;
+  for (int k = 0; k < 20000; ++k) {
+    Vec3 x;
+    for (int d = 0; d < 3; ++d) x[d] = lo[d] + u(rng) * (hi[d] - lo[d]);
+    const Vec3 y = x + Vec3(step(rng), step(rng), step(rng));
+    const Real dphi = std::abs(geom::grid_phi(v, x) - geom::grid_phi(v, y));
+    worst = std::max(worst, dphi / norm(x - y));
+    Vec3 c;
+    for (int d = 0; d < 3; ++d) c[d] = std::clamp(x[d], lo[d], hi[d]);
+    if (norm(x - c) > 0) {
+      EXPECT_GE(geom::grid_phi(v, x), t.phi_box_min() + norm(x - c) - 1e-15);
+    }
+  }
+  std::printf("phi bounds: Lipschitz bound %.4f, steepest sampled %.4f, box minimum %.3g m\n", l,
+              worst, t.phi_box_min());
+  EXPECT_LE(worst, l);
+  EXPECT_GT(worst, 1.0) << "the sample should reach the steep parts";
+}
+
+// Pyramids thrown at each other and at a floor, spinning: the system with per-pair node lists
+// (the default) steps exactly like one that scans every node every step, to the bit, while the
+// lists are remade many times (the grains move and turn by many skins) and save most lookups.
+TEST(DemSystemPairs, NodeListsGiveTheForcesOfAFullScan) {
+  auto make = [](bool lists) {
+    DemParams p = static_params(200);
+    p.gravity = Vec3(0, 0, -9.81);
+    DemSystem sys(p);
+    sys.set_node_lists(lists);
+    TemplateOptions opt;
+    opt.grid_spacing = 0.0006;
+    opt.node_spacing = 0.0018;
+    const int r = sys.add_template(GrainTemplate::trigonal_pyramid(0.01, 0.15, 7, 0.007, opt));
+    sys.add_plane_wall(Vec3(0, 0, 0), Vec3(0, 0, 1));
+    std::mt19937 rng(17);
+    // The rock collapse's rocks (79 nodes each), 5.5 mm apart: bounding spheres overlapping.
+    const Real a = 0.0055;
+    std::uniform_real_distribution<Real> j(-0.0005, 0.0005), v(-0.05, 0.05), w(-5, 5);
+    for (int x = 0; x < 5; ++x)
+      for (int y = 0; y < 4; ++y)
+        for (int z = 0; z < 4; ++z)
+          sys.add_body(r, 2500, Vec3(a * x + j(rng), a * y + j(rng), 0.004 + a * z + j(rng)),
+                       random_quat(rng), Vec3(v(rng), v(rng), v(rng)),
+                       Vec3(w(rng), w(rng), w(rng)));
+    return sys;
+  };
+  DemSystem with = make(true), without = make(false);
+  std::size_t lookups_with = 0, lookups_without = 0, contacts = 0;
+  for (int k = 0; k < 400; ++k) {
+    with.step(2e-5);
+    without.step(2e-5);
+    lookups_with += with.phi_lookups();
+    lookups_without += without.phi_lookups();
+    contacts += with.contact_count();
+    ASSERT_EQ(with.contact_count(), without.contact_count()) << "step " << k;
+  }
+  for (std::size_t i = 0; i < with.bodies().size(); ++i) {
+    const RigidBody &a = with.bodies()[i], &b = without.bodies()[i];
+    for (int d = 0; d < 3; ++d) {
+      EXPECT_EQ(a.x[d], b.x[d]) << i;
+      EXPECT_EQ(a.v[d], b.v[d]) << i;
+      EXPECT_EQ(a.w[d], b.w[d]) << i;
+    }
+    EXPECT_EQ(a.q.w, b.q.w) << i;
+    EXPECT_EQ(a.q.x, b.q.x) << i;
+  }
+  std::printf(
+      "node lists: %zu contact point-steps; phi lookups %zu with lists, %zu without; "
+      "%zu lists made, %zu pairs\n",
+      contacts, lookups_with, lookups_without, with.node_list_builds(), with.pair_count());
+  ASSERT_GT(contacts, 4000u) << "the grains should touch";
+  EXPECT_GT(with.node_list_builds(), 4 * with.pair_count())
+      << "lists must be remade as grains move";
+  EXPECT_EQ(without.node_list_builds(), 0u);
+  EXPECT_LT(lookups_with, lookups_without / 3);
+}
+
 // The pair list leaves out pairs of two non-free bodies. Releasing a fixed grain that touches
 // another fixed one (no grain moves, so no displacement would trigger a rebuild) must bring the
 // pair back: the released grain is pushed away at the next step.
