@@ -536,7 +536,16 @@ void DemSystem::compute_forces(Real dt) {
       const geom::GridSdfView phi_s = ts.view();
       const Quat qs_inv = conjugate(s.q);
       const Real reach2 = ts.bounding_radius() * ts.bounding_radius();
+      // World nodes are kept for level-set grains only: a sphere (against a level-set grain
+      // here) places its own template's nodes now.
       const Vec3* wn = world_nodes_.data() + node_begin_[mi];
+      static thread_local std::vector<Vec3> sphere_nodes;
+      if (tm.is_sphere()) {
+        sphere_nodes.resize(tm.nodes().size());
+        for (std::size_t k = 0; k < sphere_nodes.size(); ++k)
+          sphere_nodes[k] = m.x + rotate(m.q, tm.nodes()[k]);
+        wn = sphere_nodes.data();
+      }
       const std::size_t si = mi == pairs_[std::size_t(pi)].first ? pairs_[std::size_t(pi)].second
                                                                  : pairs_[std::size_t(pi)].first;
       const Vec3 slo = box_lo_[si], shi = box_hi_[si];

@@ -367,6 +367,34 @@ TEST(DemSystemPairs, NodeListsGiveTheForcesOfAFullScan) {
   EXPECT_LT(lookups_with, lookups_without / 3);
 }
 
+// A sphere against a level-set grain runs the level-set passes in both orders, so the sphere's
+// own surface nodes test the other grain's phi. The force on the pair must not depend on which
+// bodies come after the sphere in the body list (each body's world nodes sit in one array).
+TEST(DemLevelSet, SphereOnAGrainIsIndependentOfTheBodiesAfterIt) {
+  auto force = [](bool sphere_first, bool more_after) {
+    DemSystem sys(static_params(500));
+    const int s = sys.add_template(GrainTemplate::sphere(0.004));
+    const int c = sys.add_template(GrainTemplate::box(Vec3(0.005, 0.005, 0.005)));
+    const Quat tilt = from_axis_angle(Vec3(1, 2, 0), 0.3);
+    const Vec3 xs(0.0, 0.0, 0.0085), xc(0.0005, -0.0003, 0);
+    std::size_t is = 0;
+    if (sphere_first) {
+      is = sys.add_body(s, 2500, xs);
+      sys.add_body(c, 2500, xc, tilt);
+    } else {
+      sys.add_body(c, 2500, xc, tilt);
+      is = sys.add_body(s, 2500, xs);
+    }
+    if (more_after) sys.add_body(c, 2500, Vec3(0.1, 0.1, 0.1));  // far away, after both
+    sys.compute_forces(0);
+    return sys.force(is);
+  };
+  const Vec3 ref = force(true, false);
+  ASSERT_GT(norm(ref), 0.05) << "the sphere should press into the box's top face";
+  for (const Vec3& f : {force(true, true), force(false, false), force(false, true)})
+    EXPECT_LT(norm(f - ref), 1e-9 * norm(ref)) << f.x << " " << f.y << " " << f.z;
+}
+
 // The pair list leaves out pairs of two non-free bodies. Releasing a fixed grain that touches
 // another fixed one (no grain moves, so no displacement would trigger a rebuild) must bring the
 // pair back: the released grain is pushed away at the next step.
