@@ -586,7 +586,8 @@ void DemSystem::compute_forces(Real dt) {
       const Real band = ts.phi_lipschitz() * skin * Real(1.000001);  // margin for round-off
       const Quat qrel = multiply(qs_inv, m.q);
       const Vec3 trel = rotate(qs_inv, m.x - s.x);
-      if (node_lists_on_ && nl.valid) {
+      if (node_lists_on_ && nl.valid && nl.m_id == m.id && nl.s_id == s.id &&
+          nl.m_shape == m.shape && nl.s_shape == s.shape) {
         const Quat dq = multiply(qrel, conjugate(nl.q0));
         const Real moved =
             norm(trel - nl.t0) +
@@ -613,6 +614,10 @@ void DemSystem::compute_forces(Real dt) {
         nl.q0 = qrel;
         nl.t0 = trel;
         nl.valid = true;
+        nl.m_id = m.id;
+        nl.s_id = s.id;
+        nl.m_shape = m.shape;
+        nl.s_shape = s.shape;
         ++out.builds;
       }
       const std::uint32_t* order = tm.node_order().data();

@@ -188,6 +188,8 @@ class DemSystem {
     Quat q0;  // conj(q_s) q_m
     Vec3 t0;  // conj(q_s) (x_m - x_s)
     bool valid = false;
+    GlobalId m_id = 0, s_id = 0;  // the bodies it was made for (body indices may be reused)
+    int m_shape = -1, s_shape = -1;
     std::vector<std::uint32_t> nodes;  // in the order a full scan visits them
   };
   void find_pairs();
