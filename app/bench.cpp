@@ -151,6 +151,16 @@ void run_bench(const BenchOptions& opt, std::ostream& os_rank) {
     if (world_size() > 1) MPI_Barrier(MPI_COMM_WORLD);  // every rank is done with the folder
     if (r.unstable)
       throw StabilityError("bench: scene '" + scene.name + "' went unstable: " + r.failure);
+    if (r.timing.steps < opt.steps && r.at_rest) {
+      std::ostringstream m;
+      m << "bench: scene '" << scene.name << "' (" << scene.source
+        << ") came to rest (dem.stop_at_rest: kinetic energy below " << scene.dem.rest_energy
+        << " J after t = " << scene.dem.rest_after << " s) at t = " << r.sim_time << " s, after "
+        << r.steps << " steps, before " << opt.warmup + opt.steps
+        << " (warm-up and timed); lower --steps, or move the check later with --set "
+           "dem.stop_at_rest.after=T";
+      throw InputError(m.str());
+    }
     if (r.timing.steps < opt.steps)
       throw InputError("bench: scene '" + scene.name + "' (" + scene.source + ") ended after " +
                        std::to_string(r.steps) + " steps, before " +

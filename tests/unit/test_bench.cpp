@@ -138,6 +138,18 @@ TEST(Bench, RefusesBadStepCountsAndAnEndBeforeTheSteps) {
     EXPECT_NE(std::string(e.what()).find("time.end"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("sphere_pile"), std::string::npos) << e.what();
   }
+  // A grain-only run that stops at rest before the timed steps names the check, not time.end.
+  o.steps = 1000000;
+  o.overrides = {"dem.stop_at_rest={after: 0, kinetic_energy: 1.0e3}"};
+  try {
+    bench_json(o);
+    FAIL() << "a scene that came to rest before the timed steps was accepted";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("dem.stop_at_rest"), std::string::npos) << what;
+    EXPECT_NE(what.find("came to rest"), std::string::npos) << what;
+    EXPECT_EQ(what.find("raise time.end"), std::string::npos) << what;
+  }
 }
 
 }  // namespace
