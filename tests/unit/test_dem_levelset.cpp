@@ -367,6 +367,50 @@ TEST(DemSystemPairs, NodeListsGiveTheForcesOfAFullScan) {
   EXPECT_LT(lookups_with, lookups_without / 3);
 }
 
+// Node lists are carried across pair-list rebuilds by the pair's two body indices. A caller may
+// reorder the bodies (bodies() is writable), and then an index pair names other grains. Here the
+// reordered pair (0, 1) holds a box and a rock in exactly the relative pose that a rock and a box
+// had there before, so only the list's record of the bodies (ids and shapes) tells the old list
+// from a valid one: reusing it would test the box's nodes by the rock's node numbers.
+TEST(DemSystemPairs, NodeListsFollowBodiesThatAreReordered) {
+  auto make = [](bool lists) {
+    DemSystem sys(static_params(200));
+    sys.set_node_lists(lists);
+    TemplateOptions opt;
+    opt.grid_spacing = 0.0006;
+    opt.node_spacing = 0.0018;
+    const int r = sys.add_template(GrainTemplate::trigonal_pyramid(0.01, 0.15, 7, 0.007, opt));
+    const int b = sys.add_template(GrainTemplate::box(Vec3(0.003, 0.002, 0.0025), opt));
+    const Quat qr = from_axis_angle(Vec3(1, 2, 3), 0.7), qb = from_axis_angle(Vec3(-2, 1, 1), 0.4);
+    const Vec3 far(0.05, 0, 0), gap(0.0045, 0.0005, -0.0003);
+    sys.add_body(r, 2500, Vec3(), qr);     // 0: rock
+    sys.add_body(b, 2500, gap, qb);        // 1: box pressing into it
+    sys.add_body(r, 2500, far + gap, qb);  // 2: rock where body 1 is, shifted
+    sys.add_body(b, 2500, far, qr);        // 3: box where body 0 is, shifted
+    return sys;
+  };
+  DemSystem with = make(true), without = make(false);
+  with.compute_forces(1e-6);
+  without.compute_forces(1e-6);
+  ASSERT_GT(with.contact_count(), 0u) << "the box should press into the rock";
+  ASSERT_EQ(with.contact_count(), without.contact_count());
+  // Reversed, index pair (0, 1) is (box at far, rock at far + gap): the relative pose of the old
+  // pair (0, 1), with the shapes swapped.
+  std::reverse(with.bodies().begin(), with.bodies().end());
+  std::reverse(without.bodies().begin(), without.bodies().end());
+  with.compute_forces(1e-6);
+  without.compute_forces(1e-6);
+  ASSERT_GT(without.contact_count(), 0u);
+  EXPECT_EQ(with.contact_count(), without.contact_count());
+  for (std::size_t i = 0; i < with.bodies().size(); ++i) {
+    ASSERT_GT(norm(without.force(i)), 0) << "every body touches one other";
+    for (int d = 0; d < 3; ++d) {
+      EXPECT_EQ(with.force(i)[d], without.force(i)[d]) << "body index " << i;
+      EXPECT_EQ(with.torque(i)[d], without.torque(i)[d]) << "body index " << i;
+    }
+  }
+}
+
 // A sphere against a level-set grain runs the level-set passes in both orders, so the sphere's
 // own surface nodes test the other grain's phi. The force on the pair must not depend on which
 // bodies come after the sphere in the body list (each body's world nodes sit in one array).
