@@ -287,7 +287,9 @@ ConvexPolyhedron make_convex_polyhedron(const std::vector<Vec3>& normals_in,
   Real scale = 0;
   for (Real d : off) scale = std::max(scale, std::fabs(d));
   if (!(scale > 0)) throw InputError("convex polyhedron: all planes pass through the origin");
-  const Real tol = Real(1e-9) * scale;
+  // 1e-9 of the size, but never below round-off: in a float build (epsilon 1.2e-7) a vertex that
+  // three planes meet at misses the other planes by more than 1e-9, and the solid came out empty.
+  const Real tol = std::max(Real(1e-9), Real(100) * std::numeric_limits<Real>::epsilon()) * scale;
   const std::size_t np = nrm.size();
   // Vertices: intersections of three planes that satisfy every constraint.
   std::vector<Vec3> verts;
