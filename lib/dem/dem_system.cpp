@@ -537,15 +537,17 @@ void DemSystem::compute_forces(Real dt) {
       const Quat qs_inv = conjugate(s.q);
       const Real reach2 = ts.bounding_radius() * ts.bounding_radius();
       // World nodes are kept for level-set grains only: a sphere (against a level-set grain
-      // here) places its own template's nodes now.
+      // here) places its own template's nodes in this pass, only those it tests (`place`).
       const Vec3* wn = world_nodes_.data() + node_begin_[mi];
       static thread_local std::vector<Vec3> sphere_nodes;
-      if (tm.is_sphere()) {
+      const bool sphere = tm.is_sphere();
+      if (sphere) {
         sphere_nodes.resize(tm.nodes().size());
-        for (std::size_t k = 0; k < sphere_nodes.size(); ++k)
-          sphere_nodes[k] = m.x + rotate(m.q, tm.nodes()[k]);
         wn = sphere_nodes.data();
       }
+      auto place = [&](std::size_t k) {
+        if (sphere) sphere_nodes[k] = m.x + rotate(m.q, tm.nodes()[k]);
+      };
       const std::size_t si = mi == pairs_[std::size_t(pi)].first ? pairs_[std::size_t(pi)].second
                                                                  : pairs_[std::size_t(pi)].first;
       const Vec3 slo = box_lo_[si], shi = box_hi_[si];
@@ -593,10 +595,15 @@ void DemSystem::compute_forces(Real dt) {
             norm(trel - nl.t0) +
             2 * std::sqrt(dq.x * dq.x + dq.y * dq.y + dq.z * dq.z) * tm.bounding_radius();
         if (moved <= skin) {
-          for (std::uint32_t k : nl.nodes) node(k, rotate(qs_inv, wn[k] - s.x), false);
+          for (std::uint32_t k : nl.nodes) {
+            place(k);
+            node(k, rotate(qs_inv, wn[k] - s.x), false);
+          }
           return;
         }
       }
+      if (sphere)
+        for (std::size_t k = 0; k < sphere_nodes.size(); ++k) place(k);
       // Full scan. With node lists it also makes the list: every node within `band` of s. Outside
       // s's grid box phi >= phi_box_min + the distance to the box, so a node (or an octant) that
       // far out is skipped; without lists the octants and nodes beyond s's bounding sphere or

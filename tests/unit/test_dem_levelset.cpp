@@ -310,20 +310,28 @@ TEST(DemSystemPairs, PhiBoundsHoldOnRandomPoints) {
   EXPECT_GT(worst, 1.0) << "the sample should reach the steep parts";
 }
 
+// A system of the rock collapse's pyramids (79 nodes each) on a floor, for the node-list tests:
+// lists on or off, the rock template's index in `rock`.
+DemSystem rock_floor_system(bool lists, int& rock) {
+  DemParams p = static_params(200);
+  p.gravity = Vec3(0, 0, -9.81);
+  DemSystem sys(p);
+  sys.set_node_lists(lists);
+  TemplateOptions opt;
+  opt.grid_spacing = 0.0006;
+  opt.node_spacing = 0.0018;
+  rock = sys.add_template(GrainTemplate::trigonal_pyramid(0.01, 0.15, 7, 0.007, opt));
+  sys.add_plane_wall(Vec3(0, 0, 0), Vec3(0, 0, 1));
+  return sys;
+}
+
 // Pyramids thrown at each other and at a floor, spinning: the system with per-pair node lists
 // (the default) steps exactly like one that scans every node every step, to the bit, while the
 // lists are remade many times (the grains move and turn by many skins) and save most lookups.
 TEST(DemSystemPairs, NodeListsGiveTheForcesOfAFullScan) {
   auto make = [](bool lists) {
-    DemParams p = static_params(200);
-    p.gravity = Vec3(0, 0, -9.81);
-    DemSystem sys(p);
-    sys.set_node_lists(lists);
-    TemplateOptions opt;
-    opt.grid_spacing = 0.0006;
-    opt.node_spacing = 0.0018;
-    const int r = sys.add_template(GrainTemplate::trigonal_pyramid(0.01, 0.15, 7, 0.007, opt));
-    sys.add_plane_wall(Vec3(0, 0, 0), Vec3(0, 0, 1));
+    int r = 0;
+    DemSystem sys = rock_floor_system(lists, r);
     std::mt19937 rng(17);
     // The rock collapse's rocks (79 nodes each), 5.5 mm apart: bounding spheres overlapping.
     const Real a = 0.0055;
@@ -409,6 +417,42 @@ TEST(DemSystemPairs, NodeListsFollowBodiesThatAreReordered) {
       EXPECT_EQ(with.torque(i)[d], without.torque(i)[d]) << "body index " << i;
     }
   }
+}
+
+// Spheres keep no world nodes; against a level-set grain each pass places the sphere's nodes
+// that it tests, from a per-thread buffer the other pairs share. With node lists that is only the
+// listed nodes, so a listed node placed for another pair, or not at all, would show here: spheres
+// among rocks stepped with and without lists must agree to the bit.
+TEST(DemSystemPairs, NodeListsGiveTheForcesOfAFullScanWithSpheres) {
+  auto make = [](bool lists) {
+    int r = 0;
+    DemSystem sys = rock_floor_system(lists, r);
+    const int b = sys.add_template(GrainTemplate::sphere(0.0035));
+    std::mt19937 rng(5);
+    const Real a = 0.0055;
+    std::uniform_real_distribution<Real> j(-0.0005, 0.0005), w(-3, 3);
+    for (int x = 0; x < 4; ++x)
+      for (int y = 0; y < 3; ++y)
+        for (int z = 0; z < 2; ++z)
+          sys.add_body((x + 2 * y + z) % 3 ? r : b, 2500,
+                       Vec3(a * x + j(rng), a * y + j(rng), 0.004 + a * z + j(rng)),
+                       random_quat(rng), Vec3(), Vec3(w(rng), w(rng), w(rng)));
+    return sys;
+  };
+  DemSystem with = make(true), without = make(false);
+  std::size_t contacts = 0;
+  for (int k = 0; k < 300; ++k) {
+    with.step(2e-5);
+    without.step(2e-5);
+    contacts += with.contact_count();
+    ASSERT_EQ(with.contact_count(), without.contact_count()) << "step " << k;
+  }
+  ASSERT_GT(contacts, 3000u) << "the grains should touch";
+  for (std::size_t i = 0; i < with.bodies().size(); ++i)
+    for (int d = 0; d < 3; ++d) {
+      EXPECT_EQ(with.bodies()[i].x[d], without.bodies()[i].x[d]) << i;
+      EXPECT_EQ(with.bodies()[i].w[d], without.bodies()[i].w[d]) << i;
+    }
 }
 
 // A sphere against a level-set grain runs the level-set passes in both orders, so the sphere's
