@@ -11,9 +11,11 @@
 It writes OUT/summary.csv and OUT/summary.md with, per case, the opening ratio (from
 `sphdem check`), the peak force on the middle wall and its time (the largest sample, and the
 peak of the 0.05 s running mean, with the total's), the final (static) force, the
-largest run-up, the trap ratio, the boulders upstream at the end, and the largest front speed
-(over 0.05 s windows of front.csv), and draws OUT/force.png (middle-wall force against time,
-every case on one axis) and OUT/profiles.png (centreline surface at the profile time).
+largest run-up, the trap ratio, the boulders upstream and downstream at the end, the largest
+front speed (over 0.05 s windows of front.csv), and the run's steps and wall time
+(summary.json), and draws OUT/force.png (middle-wall force against time, every case on one
+axis), OUT/profiles.png (centreline surface at the profile time) and, for cases with grains,
+OUT/boulders.png (each boulder's position along the channel against time).
 
   python3 jobs/flume_study.py --out runs/flume_study [--study arrangement]
       [--presets P00 P30 P45 V30 V45] [--sphdem build/sphdem]
@@ -42,6 +44,7 @@ BOULDERS = os.path.join(ROOT, "inputs", "flume", "flume_boulders.yaml")
 # The seed's solid volume fractions (§5.3) as bead counts: fraction x 3.46 L / (pi 0.016^3 / 6).
 FRACTIONS = [("0", 0), ("0.167%", 3), ("0.334%", 5), ("0.822%", 13), ("1.176%", 19)]
 SYMMETRY = "symmetry={axis: y, at: 0.2}"
+BARRIER_X = 0.6  # the barrier row of inputs/flume/flume.yaml (barrier.x)
 IRREGULAR = ("dem.shapes[0]={name: bead, type: polyhedron, diameter: 0.016, planes: 12, "
              "variants: 8, seed: 3}")
 
@@ -61,6 +64,8 @@ def cases(study, presets):
 def read_csv(path):
     with open(path) as f:
         rows = list(csv.reader(f))
+    if not rows:  # a file not written to yet (a run that has not reached its first row)
+        return [], []
     header = rows[0]
     return header, [[float(v) for v in r] for r in rows[1:] if r]
 
@@ -142,11 +147,22 @@ def summarize(run_dir, until=float("inf")):
                 j += 1
             if fr[i][0] - fr[j][0] >= 0.04:
                 speed = max(speed, (fr[i][1] - fr[j][1]) / (fr[i][0] - fr[j][0]))
-    grains_up = float("nan")
-    if tr and len(tr[-1]) > 3:
-        grains_up = tr[-1][3]
+    grains_up = grains_down = float("nan")
+    if tr and len(tr[-1]) > 4:
+        grains_up, grains_down = tr[-1][3], tr[-1][4]
+    # Wall time and steps of the whole run (summary.json; absent while a run is going).
+    wall_s, steps = float("nan"), float("nan")
+    try:
+        with open(os.path.join(run_dir, "summary.json")) as f:
+            sj = json.load(f)
+        wall_s, steps = float(sj.get("wall_seconds", "nan")), float(sj.get("steps", "nan"))
+    except (OSError, ValueError):
+        pass
     return {
         "grains_upstream": grains_up,
+        "grains_downstream": grains_down,
+        "wall_s": wall_s,
+        "steps": steps,
         "front_speed": speed,
         "t_end": t[-1] if t else 0.0,
         "peak_force_mid": f_mid[k] if rows else 0.0,
@@ -200,7 +216,8 @@ def main():
         results.append(r)
     cols = ["preset", "opening_ratio", "peak_force_mid", "t_peak", "peak_mid_50ms", "t_peak_50ms",
             "peak_total_50ms", "static_force_mid",
-            "max_runup", "trap_ratio", "grains_upstream", "front_speed", "t_end", "finished"]
+            "max_runup", "trap_ratio", "grains_upstream", "grains_downstream", "front_speed",
+            "t_end", "steps", "wall_s", "finished"]
     write_table(os.path.join(a.out, "summary"), cols, results)
     try:
         import matplotlib
@@ -234,6 +251,29 @@ def main():
     ax.legend()
     fig.tight_layout()
     fig.savefig(os.path.join(a.out, "profiles.png"), dpi=120)
+    # Boulders: each grain's position along the channel against time (bodies.csv), one panel per
+    # case with grains, the barrier row dashed.
+    with_grains = [r for r in results
+                   if os.path.exists(os.path.join(a.out, r["preset"], "bodies.csv"))]
+    if with_grains:
+        fig, axes = plt.subplots(1, len(with_grains), figsize=(3.5 * len(with_grains), 3.5),
+                                 sharey=True, squeeze=False)
+        for ax, r in zip(axes[0], with_grains):
+            h, rows = read_csv(os.path.join(a.out, r["preset"], "bodies.csv"))
+            it, iid, ix = h.index("t"), h.index("id"), h.index("x")
+            tracks = {}
+            for q in rows:
+                tracks.setdefault(int(q[iid]), ([], []))
+                tracks[int(q[iid])][0].append(q[it])
+                tracks[int(q[iid])][1].append(q[ix])
+            for tt, xx in tracks.values():
+                ax.plot(tt, xx, linewidth=0.8)
+            ax.axhline(BARRIER_X, color="k", linestyle="--", linewidth=0.8)
+            ax.set_title(r["preset"])
+            ax.set_xlabel("t (s)")
+        axes[0][0].set_ylabel("boulder x along the channel (m)\n(barrier row dashed)")
+        fig.tight_layout()
+        fig.savefig(os.path.join(a.out, "boulders.png"), dpi=120)
 
 
 if __name__ == "__main__":
