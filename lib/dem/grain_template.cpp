@@ -11,6 +11,7 @@
 #include <memory>
 #include <random>
 #include <sstream>
+#include <type_traits>
 #include <tuple>
 #include <unordered_set>
 
@@ -206,10 +207,19 @@ void symmetric_eigen(const Mat3& a_in, Vec3* lambda, Mat3* v_out) {
       a[i][j] = 0.5 * (double(a_in.m[i][j]) + double(a_in.m[j][i]));
       v[i][j] = i == j ? 1.0 : 0.0;
     }
+  // The rotations stop once the off-diagonal part is round-off. The tensor comes from
+  // quadrature sums in Real: in a float build they leave off-diagonal noise of about
+  // eps_float times the diagonal, and rotating on it would set the frame of a shape with equal
+  // moments (a cube) at random, its axes off the faces. So the test there is (100 eps_float)^2
+  // on the squares; double keeps 1e-32.
+  const double off_tol = std::is_same_v<Real, float>
+                             ? 1e4 * double(std::numeric_limits<float>::epsilon()) *
+                                   double(std::numeric_limits<float>::epsilon())
+                             : 1e-32;
   for (int sweep = 0; sweep < 50; ++sweep) {
     const double off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
     const double diag = a[0][0] * a[0][0] + a[1][1] * a[1][1] + a[2][2] * a[2][2];
-    if (off <= 1e-32 * diag || off == 0) break;
+    if (off <= off_tol * diag || off == 0) break;
     for (int p = 0; p < 2; ++p)
       for (int q = p + 1; q < 3; ++q) {
         if (a[p][q] == 0) continue;

@@ -1,7 +1,9 @@
 #include "diagnostics/mirror.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <type_traits>
 
 #include "core/error.hpp"
@@ -22,15 +24,19 @@ std::vector<std::int32_t> mirror_solids(const Scene& scene, std::vector<std::str
       if (scene.solids[s].name == name) return std::int32_t(s);
     return std::int32_t(-1);
   };
-  const Real tol = Real(1e-6) * scene.sph.dp;
+  // Pairs match to a millionth of dp and 1e-9 rad, or to 100 round-offs of Real where that is
+  // larger (a float build: one ulp of a 0.6 m coordinate is 6e-8 m).
+  const Real eps100 = Real(100) * std::numeric_limits<Real>::epsilon();
+  const Real angle_tol = std::max(Real(1e-9), eps100);
   for (std::size_t k = 0; k < walls.size(); ++k) {
     const Vec3 c = sym.reflect_point(walls[k].center);
+    const Real tol = std::max(Real(1e-6) * scene.sph.dp, eps100 * (norm(c) + scene.sph.dp));
     // A reflection in a vertical plane turns the rotation about z the other way.
     const Real a = sym.axis == 2 ? walls[k].angle : -walls[k].angle;
     bool found = false;
     for (std::size_t j = 0; j < walls.size() && !found; ++j) {
       const Real da = std::remainder(walls[j].angle - a, Real(kPi));  // a box turned by pi
-      if (norm(walls[j].center - c) <= tol && std::fabs(da) <= Real(1e-9)) {
+      if (norm(walls[j].center - c) <= tol && std::fabs(da) <= angle_tol) {
         const std::int32_t sk = index(k), sj = index(j);
         if (sk >= 0 && sj >= 0) m[std::size_t(sk)] = sj;
         found = true;

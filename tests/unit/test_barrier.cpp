@@ -6,11 +6,15 @@
 #include "core/error.hpp"
 #include "io/scene_yaml.hpp"
 #include "diagnostics/probes.hpp"
+#include "precision.hpp"
 #include "scene/barrier.hpp"
 #include "solver/fluid_params.hpp"
 
 namespace sphdem {
 namespace {
+
+using test::kFloatEps;
+using test::tol;
 
 // Water (1000 kg/m^3) at rest on the lattice (i + 1/2, j + 1/2, k + 1/2 + shift) dp, nx x ny x nz.
 ParticleSet<Host> water_lattice(int nx, int ny, int nz, Real dp, Real shift = 0) {
@@ -47,13 +51,17 @@ TEST(Barrier, OpeningRatiosOfThePresets) {
     const Real a = deg * kPi / 180;
     return 1 - 7 * (w * std::cos(a) + t * std::sin(a)) / W;
   };
-  EXPECT_NEAR(barrier_opening_ratio(preset("P00")), 0.125, 1e-12);
-  EXPECT_NEAR(barrier_opening_ratio(preset("V30")), projected(30), 1e-12);
-  EXPECT_NEAR(barrier_opening_ratio(preset("V45")), projected(45), 1e-12);
+  // Float: the ratio is 1 - covered / W, with covered a sum of 7 shadow lengths, each the
+  // difference of two shadow ends of size <= W that carry a few roundings (pitch, centre, cos/sin,
+  // half-extent); so covered / W, and the test's own projected(), carry <= ~16 eps.
+  const double ratio_tol = tol(1e-12, 16 * kFloatEps);
+  EXPECT_NEAR(barrier_opening_ratio(preset("P00")), 0.125, ratio_tol);
+  EXPECT_NEAR(barrier_opening_ratio(preset("V30")), projected(30), ratio_tol);
+  EXPECT_NEAR(barrier_opening_ratio(preset("V45")), projected(45), ratio_tol);
   EXPECT_NEAR(barrier_opening_ratio(preset("V30")), 0.128, 0.0005);  // the seed's values
   EXPECT_NEAR(barrier_opening_ratio(preset("V45")), 0.220, 0.0005);
-  EXPECT_NEAR(barrier_opening_ratio(preset("P30")), projected(30), 1e-12);
-  EXPECT_NEAR(barrier_opening_ratio(preset("P45")), projected(45), 1e-12);
+  EXPECT_NEAR(barrier_opening_ratio(preset("P30")), projected(30), ratio_tol);
+  EXPECT_NEAR(barrier_opening_ratio(preset("P45")), projected(45), ratio_tol);
 }
 
 // Overlapping shadows are counted once: walls wider than the pitch close the channel, not more.
@@ -67,21 +75,26 @@ TEST(Barrier, OverlappingWallsAreCountedOnce) {
 }
 
 TEST(Barrier, WallPlacement) {
+  // Float: coordinates are below 1 m (x ~ 0.6 to 0.7, y <= 0.4) and come from a few roundings
+  // (the literals 0.6 and 0.4, pitch, (k + 1/2) pitch, |off| tan a, the box SDF's transform),
+  // each at most eps/2 of 1 m: 4 eps of 1 m bounds them, and the SDF values phi computed from
+  // them.
+  const double pos_tol = tol(1e-12, 4 * kFloatEps);
   const Barrier p = preset("P30");
   const auto pw = barrier_walls(p);
   ASSERT_EQ(pw.size(), 7u);
   for (int k = 0; k < 7; ++k) {
-    EXPECT_NEAR(pw[k].center.y, (k + 0.5) * 0.4 / 7, 1e-12);
-    EXPECT_NEAR(pw[k].center.x, 0.6, 1e-12);  // a straight row
+    EXPECT_NEAR(pw[k].center.y, (k + 0.5) * 0.4 / 7, pos_tol);
+    EXPECT_NEAR(pw[k].center.x, 0.6, pos_tol);  // a straight row
     EXPECT_NEAR(pw[k].angle, kPi / 6, 1e-12);
   }
   // V30, apex upstream: the centre wall at x, the others trail downstream along arms at 30°,
   // turned to lie along their arm (mirror images about the centre line).
   const auto vw = barrier_walls(preset("V30"));
-  EXPECT_NEAR(vw[3].center.x, 0.6, 1e-12);
+  EXPECT_NEAR(vw[3].center.x, 0.6, pos_tol);
   for (int k = 0; k < 3; ++k) {
     const Real off = std::abs(vw[k].center.y - 0.2);
-    EXPECT_NEAR(vw[k].center.x, 0.6 + off * std::tan(kPi / 6), 1e-12);
+    EXPECT_NEAR(vw[k].center.x, 0.6 + off * std::tan(kPi / 6), pos_tol);
     EXPECT_NEAR(vw[6 - k].center.x, vw[k].center.x, 1e-12);
     EXPECT_NEAR(vw[k].angle, -vw[6 - k].angle, 1e-12);
   }
@@ -93,8 +106,8 @@ TEST(Barrier, WallPlacement) {
   EXPECT_EQ(solids[6].name, "barrier_7");
   for (std::size_t k = 0; k < 7; ++k) {
     const Vec3 c = barrier_walls(preset("P00"))[k].center + Vec3(0, 0, 0.045);
-    EXPECT_NEAR(solids[k].sdf->phi(c), -0.0065, 1e-12);  // half the thickness
-    EXPECT_NEAR(solids[k].sdf->phi(c - Vec3(0.0065 + 0.013, 0, 0)), 0.013, 1e-12);
+    EXPECT_NEAR(solids[k].sdf->phi(c), -0.0065, pos_tol);  // half the thickness
+    EXPECT_NEAR(solids[k].sdf->phi(c - Vec3(0.0065 + 0.013, 0, 0)), 0.013, pos_tol);
   }
 }
 
@@ -155,14 +168,22 @@ barrier: {preset: P00, x: 0.3, y: [0, 0.2]}
   const ChannelFlow c = probe_channel_flow(ps, p, scene.gravity, 0.1, 0.1);
   EXPECT_NEAR(c.u, 1.5, 1e-12);
   EXPECT_NEAR(c.depth, 0.04, 0.25 * dp);
-  EXPECT_NEAR(c.froude, 1.5 / std::sqrt(9.4757 * c.depth), 1e-12);
+  // Float: Fr = u / sqrt(g_n D) takes 3 roundings (product, sqrt, quotient) and g_n = 9.4757 is
+  // rounded once: <= 2.5 eps relative; 4 eps of Fr.
+  EXPECT_NEAR(c.froude, 1.5 / std::sqrt(9.4757 * c.depth), tol(1e-12, 4 * kFloatEps * c.froude));
   EXPECT_NEAR(c.froude, 1.5 / std::sqrt(9.4757 * 0.04), 0.05);
   // Off the layer: dry.
   const ChannelFlow dry = probe_channel_flow(ps, p, scene.gravity, 0.19, 0.5);
   EXPECT_EQ(dry.depth, 0);
   EXPECT_EQ(dry.froude, 0);
   const Trap t = barrier_trap(scene.barrier, ps);
-  EXPECT_NEAR(t.fluid_upstream, ps.n_fluid * 1000 * dp * dp * dp, 1e-9);
+  // Float: the trap adds n = 12800 equal masses m one by one. The k-th partial sum is k m (up to
+  // the earlier errors), rounded by at most u k m (u = eps/2), so the total error is at most
+  // u m n (n + 1) / 2 = (n + 1) eps M / 4 for M = n m; the reference n 1000 dp^3 and the masses
+  // themselves are rounded differently, which adds a few eps of M.
+  const Real fluid = ps.n_fluid * 1000 * dp * dp * dp;
+  EXPECT_NEAR(t.fluid_upstream, fluid,
+              tol(1e-9, ((double(ps.n_fluid) + 1) / 4 + 4) * kFloatEps * fluid));
   EXPECT_EQ(t.fluid_downstream, 0);
 }
 
@@ -204,12 +225,17 @@ TEST(Probes, VelocityProbeInterpolatesTheFluidVelocity) {
   const Real dp = 0.01;
   ParticleSet<Host> ps = water_lattice(12, 12, 12, dp);
   for (Index i = 0; i < ps.n_fluid; ++i) ps.vel[i] = Vec3(0.3, -0.1, 0.2);
+  // Float: Shepard's estimate is sum_j w_j v_j / sum_j w_j over the N ~ 58 lattice points within
+  // 2h = 2.4 dp; each sum of N terms carries up to N u of relative round-off (u = eps/2), so
+  // the quotient carries up to ~N eps (+ the literals' own rounding): 64 eps of the largest
+  // velocity in the support (0.3 m/s for the uniform field, 2 z <= 0.16 m/s for the shear).
   const Vec3 u = probe_velocity(ps, p, Vec3(0.043, 0.071, 0.052));
-  EXPECT_NEAR(u.x, 0.3, 1e-12);
-  EXPECT_NEAR(u.y, -0.1, 1e-12);
-  EXPECT_NEAR(u.z, 0.2, 1e-12);
+  EXPECT_NEAR(u.x, 0.3, tol(1e-12, 64 * kFloatEps * 0.3));
+  EXPECT_NEAR(u.y, -0.1, tol(1e-12, 64 * kFloatEps * 0.3));
+  EXPECT_NEAR(u.z, 0.2, tol(1e-12, 64 * kFloatEps * 0.3));
   for (Index i = 0; i < ps.n_fluid; ++i) ps.vel[i] = Vec3(2 * ps.pos[i].z, 0, 0);  // shear
-  EXPECT_NEAR(probe_velocity(ps, p, Vec3(0.055, 0.055, 0.055)).x, 0.11, 1e-12);
+  EXPECT_NEAR(probe_velocity(ps, p, Vec3(0.055, 0.055, 0.055)).x, 0.11,
+              tol(1e-12, 64 * kFloatEps * 0.16));
   // Near the top the kernel sees fluid only below: Shepard's estimate leans toward it.
   EXPECT_LT(probe_velocity(ps, p, Vec3(0.055, 0.055, 0.115)).x, 0.23);
   const Vec3 dry = probe_velocity(ps, p, Vec3(0.05, 0.05, 0.25));

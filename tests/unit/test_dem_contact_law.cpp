@@ -9,9 +9,13 @@
 
 #include "dem/contact_law.hpp"
 #include "dem/rigid_body.hpp"
+#include "precision.hpp"
 
 namespace sphdem::dem {
 namespace {
+
+using test::kFloatEps;
+using test::tol;
 
 std::vector<std::vector<double>> read_numeric_csv(const std::string& path) {
   std::ifstream f(path);
@@ -90,8 +94,8 @@ TEST(DemContactLaw, ContactTimeAndStep) {
   EXPECT_DOUBLE_EQ(dem_time_step(m, kn), kPi * std::sqrt(m / kn) / 50);
   EXPECT_DOUBLE_EQ(effective_mass(2, 2), 1);
   EXPECT_DOUBLE_EQ(effective_mass(2, 0), 2);  // wall
-  EXPECT_DOUBLE_EQ(effective_radius(0.01, 0.01), 0.005);
-  EXPECT_DOUBLE_EQ(effective_radius(0.1, 0), 0.1);  // plane
+  EXPECT_REAL_EQ(effective_radius(0.01, 0.01), 0.005);
+  EXPECT_DOUBLE_EQ(effective_radius(0.1, 0), Real(0.1));  // plane: the radius itself
 }
 
 TEST(DemContactLaw, StiffnessFromYoungForTable2) {
@@ -103,7 +107,10 @@ TEST(DemContactLaw, StiffnessFromYoungForTable2) {
   EXPECT_NEAR(kn, 1.758e5, 0.001 * 1.758e5);
   // Consistency: the Hertz force at the reference overlap equals kn times that overlap.
   const Real r_star = 0.004, dref = 1e-2 * r_star;
-  EXPECT_NEAR(hertz_constant(e_star, r_star) * std::pow(dref, 1.5), kn * dref, 1e-9 * kn * dref);
+  // Float: both sides are products of ~8 rounded factors (E*, R*, sqrt, 4/3, dref, pow): <= ~8 eps
+  // relative.
+  EXPECT_NEAR(hertz_constant(e_star, r_star) * std::pow(dref, 1.5), kn * dref,
+              tol(1e-9, 8 * kFloatEps) * kn * dref);
 }
 
 TEST(DemContactLaw, HertzMatchesChungOoiAnalyticTable) {
@@ -132,7 +139,7 @@ TEST(DemContactLaw, TangentialSpringSticksThenSlidesAtTheCap) {
   Vec3 s;
   // Stick: force -kt s, s = v t.
   Vec3 f = tangential_force(s, n, Vec3(1, 0, 0), dt, kt, 0, mu, fn);
-  EXPECT_NEAR(s.x, 1e-3, 1e-15);
+  EXPECT_NEAR(s.x, Real(1e-3), 1e-15);  // 1 m/s times dt exactly
   EXPECT_NEAR(f.x, -1.0, 1e-12);
   EXPECT_NEAR(f.y, 0, 1e-15);
   // The normal part of v_rel does not load the spring.
@@ -142,14 +149,18 @@ TEST(DemContactLaw, TangentialSpringSticksThenSlidesAtTheCap) {
   f = tangential_force(s, n, Vec3(0, 100, 0), dt, kt, 0, mu, fn);
   EXPECT_NEAR(norm(f), mu * fn, 1e-12);
   EXPECT_LT(f.y, 0);
-  EXPECT_NEAR(norm(s), mu * fn / kt, 1e-15);
+  // Float: s = -f / kt with f rescaled to the cap and its norm taken again: ~8 roundings of a
+  // value mu fn / kt, 4 eps of it.
+  EXPECT_NEAR(norm(s), mu * fn / kt, tol(1e-15, 4 * kFloatEps * mu * fn / kt));
   EXPECT_NEAR(s.y, -f.y / kt, 1e-15);
   // A rotated contact plane: the spring is projected and keeps its length.
   Vec3 s2(1e-3, 0, 0);
   const Vec3 n2 = Vec3(0.1, 0, 1) / norm(Vec3(0.1, 0, 1));
   tangential_force(s2, n2, Vec3(0, 0, 0), dt, kt, 0, mu, fn);
-  EXPECT_NEAR(dot(s2, n2), 0, 1e-15);
-  EXPECT_NEAR(norm(s2), 1e-3, 1e-15);
+  // Float: the projection s - (s.n) n, its rescaling by |s| / |s_p| and the checks' dot and norm
+  // each take a few roundings of values of size |s| = 1e-3 (|n| = 1): 4 eps of 1e-3.
+  EXPECT_NEAR(dot(s2, n2), 0, tol(1e-15, 4 * kFloatEps * 1e-3));
+  EXPECT_NEAR(norm(s2), 1e-3, tol(1e-15, 4 * kFloatEps * 1e-3));
   // A tensile normal force (the dashpot's pull at the end of a damped contact) carries no
   // friction: the force and the spring are zero, however the contact slides.
   Vec3 s3(1e-3, 0, 0);
@@ -178,7 +189,9 @@ TEST(DemContactLaw, ContactForcePushesMasterOutAndDampsApproach) {
   p.r_star = 0.01;
   Vec3 s2;
   const Vec3 fh = contact_force(p, 1e-4, Vec3(1, 0, 0), Vec3(0, 0, 0), 1e-4, s2, &fn);
-  EXPECT_NEAR(fh.x, p.k_hertz * 1e-6, 1e-9 * p.k_hertz * 1e-6);
+  // Float: K d sqrt(d) with d = 1e-4 rounded (1.5 u in d^1.5), sqrt, two products and the sum
+  // with the zero tangential force: <= ~4 u = 2 eps relative; 4 eps.
+  EXPECT_NEAR(fh.x, p.k_hertz * 1e-6, tol(1e-9, 4 * kFloatEps) * p.k_hertz * 1e-6);
 }
 
 // A contact point at a lever arm sees a lighter body: for a rod of mass m and length L
@@ -195,7 +208,13 @@ TEST(DemContactLaw, PointMassIncludesRotationAndRescalesTheDashpot) {
   const Vec3 across = rotate(rod.q, Vec3(0, 0, 1));
   rod.x = Vec3(1, 2, 3);
   const Vec3 tip = rod.x + Real(0.5) * len * axis;
-  EXPECT_NEAR(inverse_point_mass(rod, tip, across), 4 / rod.mass, 1e-12);
+  // Float: the lever arm tip - x (0.15 m) is the difference of positions of size |tip| ~ 3.7 m,
+  // and tip is rounded to u |tip| per coordinate (u = eps/2): the arm carries a relative error
+  // of up to sqrt(3) u |tip| / 0.15 ~ 18 eps, doubled in the rotational part u^2 / I = 3 / m;
+  // plus a few eps of the result for the rest of the arithmetic.
+  const double arm_err = std::sqrt(3.0) * 0.5 * kFloatEps * norm(tip) / (0.5 * len);
+  EXPECT_NEAR(inverse_point_mass(rod, tip, across), 4 / rod.mass,
+              tol(1e-12, 2 * arm_err * 3 / rod.mass + 8 * kFloatEps * 4 / rod.mass));
   EXPECT_NEAR(inverse_point_mass(rod, tip, axis), 1 / rod.mass, 1e-12);
   EXPECT_NEAR(inverse_point_mass(rod, rod.x, across), 1 / rod.mass, 1e-12);
   rod.motion = Motion::kFixed;

@@ -15,9 +15,13 @@
 #endif
 
 #include "dem/dem_system.hpp"
+#include "precision.hpp"
 
 namespace sphdem::dem {
 namespace {
+
+using test::kFloatEps;
+using test::tol;
 
 DemParams static_params(Real kn) {
   DemParams p;
@@ -54,16 +58,24 @@ TEST(DemLevelSet, IdenticalGrainsGetEqualAndOppositeForces) {
     if (norm(fa) == 0) continue;
     ++checked;
     const Real scale = norm(fa);
+    // Float: a body's force and torque are sums over the pair's n (~400) node contacts, taken in
+    // another order when the bodies are swapped. A sum of n terms carries up to (n - 1) u
+    // sum |f_i| of round-off (u = eps/2), and the node forces of one contact lie close to one
+    // normal (sum |f_i| ~ |F|): two orders differ by up to n eps |F|, the torques (lever arms up
+    // to the bounding radius R) by n eps |F| R, and the balance (which adds x_B x F, |x_B| < 0.01
+    // m) by n eps |F| (R + 0.01 m).
+    const double n_eps = double(ab.contact_count()) * kFloatEps;
+    const double arm = shape.bounding_radius();
     EXPECT_LT(norm(fa + fb), 1e-12 * scale);
     // Angular momentum balance about the origin: T_A + T_B + x_A x F_A + x_B x F_B = 0.
     const Vec3 l = ab.torque(0) + ab.torque(1) + cross(xa, fa) + cross(xb, fb);
-    EXPECT_LT(norm(l), 1e-10 * scale * 0.01);
+    EXPECT_LT(norm(l), tol(1e-10 * scale * 0.01, n_eps * scale * (arm + 0.01)));
     // Repulsive: A is pushed away from B.
     EXPECT_GT(dot(fa, xa - xb), 0);
     // Swapped order: the same force and torque on the same physical body.
-    EXPECT_LT(norm(ba.force(1) - fa), 1e-12 * scale);
-    EXPECT_LT(norm(ba.torque(1) - ab.torque(0)), 1e-12 * scale * 0.01);
-    EXPECT_LT(norm(ba.force(0) - fb), 1e-12 * scale);
+    EXPECT_LT(norm(ba.force(1) - fa), tol(1e-12 * scale, n_eps * scale));
+    EXPECT_LT(norm(ba.torque(1) - ab.torque(0)), tol(1e-12 * scale * 0.01, n_eps * scale * arm));
+    EXPECT_LT(norm(ba.force(0) - fb), tol(1e-12 * scale, n_eps * scale));
   }
   EXPECT_GE(checked, 5) << "too few overlapping configurations";
 }
@@ -88,8 +100,15 @@ TEST(DemLevelSet, FaceToFaceOverlapGivesKnTimesDepthPerNode) {
   sys.compute_forces(1e-6);
   std::printf("face contact: F_z %.6f N, expected %.6f N, %zu contact points\n", sys.force(1).z,
               64 * kn * delta, sys.contact_count());
-  EXPECT_NEAR(sys.force(1).z, 64 * kn * delta, 1e-9 * 64 * kn * delta);
-  EXPECT_NEAR(sys.force(1).x, 0, 1e-9 * 64 * kn * delta);
+  // Float: each node's depth delta = 1e-4 m is read from positions and phi values of size up to
+  // L = 0.02 m (B's centre at z = 0.0199), each rounded to u L (u = eps/2) in a few steps (body
+  // pose, node transform, trilinear phi): the depth, and so each node force, carries a relative
+  // error of up to ~4 eps L / delta = 1e-4. The normals come from phi differences over the
+  // 0.25 mm grid cells (L / 0.25 mm = 80 < L / delta), so the x component stays below the same
+  // bound, and summing the 128 forces adds only ~128 u.
+  const double face_tol = tol(1e-9, 4 * kFloatEps * 0.02 / delta);
+  EXPECT_NEAR(sys.force(1).z, 64 * kn * delta, face_tol * 64 * kn * delta);
+  EXPECT_NEAR(sys.force(1).x, 0, face_tol * 64 * kn * delta);
   EXPECT_EQ(sys.contact_count(), 128u);
 }
 
@@ -122,7 +141,10 @@ TEST(DemLevelSet, TimeStepIsContactTimeOverFifty) {
   const int s = sys.add_template(GrainTemplate::sphere(0.008));
   sys.add_body(s, 2500, Vec3(0, 0, 0));
   const Real m = sys.bodies()[0].mass;
-  EXPECT_NEAR(sys.time_step(), kPi * std::sqrt(0.5 * m / 2e5) / 50, 1e-15);
+  // Float: pi sqrt(m* / kn) / 50 takes ~5 roundings on each side (m* = m / 2, quotient, sqrt,
+  // two products): 4 eps of the step.
+  EXPECT_NEAR(sys.time_step(), kPi * std::sqrt(0.5 * m / 2e5) / 50,
+              tol(1e-15, 4 * kFloatEps * sys.time_step()));
 }
 
 TEST(DemLevelSet, HistoryIsKeyedByBodyIdNotSlot) {
@@ -154,6 +176,9 @@ TEST(DemLevelSet, HistoryIsKeyedByBodyIdNotSlot) {
 
 namespace sphdem::dem {
 namespace {
+
+using test::kFloatEps;
+using test::tol;
 
 // A jittered lattice of spheres and pyramids, overlapping their neighbours, on a floor: enough
 // bodies (>= 64) that the pair search and the force loops run on OpenMP threads.
@@ -459,7 +484,8 @@ TEST(DemSystemPairs, NodeListsGiveTheForcesOfAFullScanWithSpheres) {
 // own surface nodes test the other grain's phi. The force on the pair must not depend on which
 // bodies come after the sphere in the body list (each body's world nodes sit in one array).
 TEST(DemLevelSet, SphereOnAGrainIsIndependentOfTheBodiesAfterIt) {
-  auto force = [](bool sphere_first, bool more_after) {
+  std::size_t contacts = 0;
+  auto force = [&contacts](bool sphere_first, bool more_after) {
     DemSystem sys(static_params(500));
     const int s = sys.add_template(GrainTemplate::sphere(0.004));
     const int c = sys.add_template(GrainTemplate::box(Vec3(0.005, 0.005, 0.005)));
@@ -475,12 +501,17 @@ TEST(DemLevelSet, SphereOnAGrainIsIndependentOfTheBodiesAfterIt) {
     }
     if (more_after) sys.add_body(c, 2500, Vec3(0.1, 0.1, 0.1));  // far away, after both
     sys.compute_forces(0);
+    contacts = sys.contact_count();
     return sys.force(is);
   };
   const Vec3 ref = force(true, false);
   ASSERT_GT(norm(ref), 0.05) << "the sphere should press into the box's top face";
+  // Float: the sphere's force sums its n (~200) node contacts, in another order when the body
+  // list changes; two orders of a sum of n nearly parallel forces differ by up to n eps |F|
+  // (as in IdenticalGrainsGetEqualAndOppositeForces).
+  const double order_tol = tol(1e-9, double(contacts) * kFloatEps);
   for (const Vec3& f : {force(true, true), force(false, false), force(false, true)})
-    EXPECT_LT(norm(f - ref), 1e-9 * norm(ref)) << f.x << " " << f.y << " " << f.z;
+    EXPECT_LT(norm(f - ref), order_tol * norm(ref)) << f.x << " " << f.y << " " << f.z;
 }
 
 // The pair list leaves out pairs of two non-free bodies. Releasing a fixed grain that touches

@@ -12,9 +12,13 @@
 #include "core/error.hpp"
 #include "dem/grain_template.hpp"
 #include "geometry/grid_sdf.hpp"
+#include "precision.hpp"
 
 namespace sphdem::dem {
 namespace {
+
+using test::kFloatEps;
+using test::tol;
 
 double rel(double a, double b) {
   return std::fabs(a - b) / std::fabs(b);
@@ -76,10 +80,15 @@ TEST(DemTemplate, EllipsoidInertiaMatchesAnalytic) {
 TEST(DemTemplate, SphereIsExactAndFlagged) {
   const GrainTemplate t = GrainTemplate::sphere(0.01);
   EXPECT_TRUE(t.is_sphere());
-  EXPECT_DOUBLE_EQ(t.radius(), 0.01);
-  EXPECT_NEAR(t.volume(), 4.0 / 3.0 * kPi * 1e-6, 1e-15);
-  EXPECT_NEAR(t.inertia_per_density().x, 0.4 * t.volume() * 1e-4, 1e-18);
-  for (const Vec3& n : t.nodes()) EXPECT_NEAR(norm(n), 0.01, 1e-12);
+  EXPECT_DOUBLE_EQ(t.radius(), Real(0.01));  // the radius as given
+  // Float: V = 4/3 pi r^3 and I = 0.4 V r^2 take ~6 roundings and r = 0.01 is rounded once (3 u
+  // in r^3, 2 u in r^2): <= ~4 eps relative. The nodes are unit Fibonacci directions (z, the
+  // sqrt(1 - z^2), cos and sin, products: a few u) times r, and the check's norm adds ~4 u:
+  // 4 eps of r.
+  EXPECT_NEAR(t.volume(), 4.0 / 3.0 * kPi * 1e-6, tol(1e-15, 4 * kFloatEps * t.volume()));
+  EXPECT_NEAR(t.inertia_per_density().x, 0.4 * t.volume() * 1e-4,
+              tol(1e-18, 4 * kFloatEps * t.inertia_per_density().x));
+  for (const Vec3& n : t.nodes()) EXPECT_NEAR(norm(n), 0.01, tol(1e-12, 4 * kFloatEps * 0.01));
   EXPECT_NEAR(geom::grid_phi(t.view(), Vec3(0.002, 0.001, -0.003)),
               norm(Vec3(0.002, 0.001, -0.003)) - 0.01, 0.1 * t.grid_spacing());
 }

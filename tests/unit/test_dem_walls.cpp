@@ -71,7 +71,7 @@ TEST(DemWalls, BadWallMaterialIsRefused) {
   EXPECT_THROW(sys.set_wall_contact(w, std::nan(""), -1), InputError);
   EXPECT_THROW(sys.set_wall_contact(w + 1, 0.3, 0.5), InputError);
   sys.set_wall_contact(w, 0.3, 0.5);
-  EXPECT_DOUBLE_EQ(sys.walls()[std::size_t(w)].mu, 0.3);
+  EXPECT_DOUBLE_EQ(sys.walls()[std::size_t(w)].mu, Real(0.3));
   sys.set_wall_contact(w, -1, -1);  // back to grain_wall's
   EXPECT_LT(sys.walls()[std::size_t(w)].mu, 0);
   EXPECT_LT(sys.walls()[std::size_t(w)].restitution, 0);
@@ -105,8 +105,8 @@ dem:
   const Wall& lid = d.system->walls()[std::size_t(d.wall_index[1])];
   EXPECT_LT(floor.mu, 0);
   EXPECT_LT(floor.restitution, 0);
-  EXPECT_DOUBLE_EQ(lid.mu, 0.9);
-  EXPECT_DOUBLE_EQ(lid.restitution, 0.2);
+  EXPECT_DOUBLE_EQ(lid.mu, Real(0.9));  // the scene's values, stored as read
+  EXPECT_DOUBLE_EQ(lid.restitution, Real(0.2));
   EXPECT_DOUBLE_EQ(lid.zeta, damping_ratio_from_restitution(0.2));
 }
 

@@ -7,9 +7,13 @@
 
 #include "coupling/grain_boundary.hpp"
 #include "geometry/grid_sdf.hpp"
+#include "precision.hpp"
 
 namespace sphdem {
 namespace {
+
+using test::kFloatEps;
+using test::tol;
 
 dem::DemSystem one_box(Vec3 x, Quat q = {}, Vec3 v = {}, Vec3 w = {}) {
   dem::DemParams prm;
@@ -33,7 +37,9 @@ TEST(GrainBoundary, LatticeInsideTheSurfaceWithMirroredGhosts) {
   for (std::size_t k = 0; k < s.pos.size(); ++k) {
     const Real phi = geom::grid_phi(g, s.pos[k]);
     EXPECT_LT(phi, 0);
-    EXPECT_NEAR(norm(s.normal[k]), 1, 1e-9);
+    // Float: the normal is v / |v| and the check takes its norm again, about 16 roundings of
+    // u = eps/2 each: 8 eps.
+    EXPECT_NEAR(norm(s.normal[k]), 1, tol(1e-9, 8 * test::kFloatEps));
     // Near a face the ghost node is the mirror image through the surface: phi(ghost) = -phi.
     // Where two faces are equally near (edges, corners, the cube's diagonals) the gradient of phi
     // points between them and the mirror image falls short: it is only further out than the point.
@@ -88,17 +94,29 @@ TEST(GrainBoundary, PosesFollowTheGrainAndLoadsSumMA) {
   for (Index i = ps.wall_begin(); i < ps.size(); ++i)
     d0.push_back(norm(ps.pos[std::size_t(i)] - x0));
   c.place(ps, sys);
+  // Float: each pose rounds every coordinate (of size <= 0.7 m) to u 0.7 m (u = eps/2), and the
+  // rotation of the <= 0.07 m body-frame point adds a few u of that: a distance moves by
+  // <= sqrt(3) u 0.7 m per pose, two poses: < 4 eps 0.7 m.
   for (Index i = ps.wall_begin(); i < ps.size(); ++i)
     EXPECT_NEAR(norm(ps.pos[std::size_t(i)] - sys.bodies()[0].x),
-                d0[std::size_t(i - ps.wall_begin())], 1e-12);
+                d0[std::size_t(i - ps.wall_begin())], tol(1e-12, 4 * kFloatEps * 0.7));
   // Loads: a uniform acceleration a on every grain slot gives F = N m a and no torque about the
   // (symmetric) centroid; a linear field gives the matching torque.
   for (Index i = ps.wall_begin(); i < ps.size(); ++i) ps.acc[std::size_t(i)] = Vec3(0, 0, 3);
   std::vector<Vec3> f, t;
   c.loads(ps, sys, f, t);
   const Real mb = 1000 * 1e-6;
-  EXPECT_NEAR(f[0].z, 512 * mb * 3, 1e-9);
-  EXPECT_NEAR(norm(t[0]), 0, 1e-9);
+  // Float: F sums n equal forces mb a: the k-th partial sum is rounded by <= u (k/n) F, in all
+  // (n + 1) eps F / 4, plus a few eps for mb a itself. The torque sums n terms r x mb a of size
+  // <= R mb a (R = 0.07 m, the cube's half diagonal) that cancel in pairs: the sum's round-off is
+  // <= n u (n R mb a), and the arms r = x_i - x (positions <= 0.7 m, rounded to u 0.7 m per
+  // coordinate) add n sqrt(3) u 0.7 m mb a; 2x for the two nonzero components.
+  const double n_grain = double(ps.n_grain);
+  EXPECT_NEAR(f[0].z, 512 * mb * 3,
+              tol(1e-9, ((n_grain + 1) / 4 + 4) * kFloatEps * n_grain * mb * 3));
+  EXPECT_NEAR(
+      norm(t[0]), 0,
+      tol(1e-9, 2 * n_grain * 0.5 * kFloatEps * (n_grain * 0.07 + std::sqrt(3.0) * 0.7) * mb * 3));
   for (Index i = ps.wall_begin(); i < ps.size(); ++i) {
     const Vec3 r = ps.pos[std::size_t(i)] - sys.bodies()[0].x;
     ps.acc[std::size_t(i)] = Vec3(0, 0, r.x);
@@ -109,7 +127,9 @@ TEST(GrainBoundary, PosesFollowTheGrainAndLoadsSumMA) {
     const Vec3 r = ps.pos[std::size_t(i)] - sys.bodies()[0].x;
     ty += -r.x * mb * r.x;  // (r x F)_y = z Fx - x Fz
   }
-  EXPECT_NEAR(t[0].y, ty, 1e-12);
+  // Float: the same n same-signed terms -x^2 mb, each product rounded in another order (2 u) and
+  // summed (<= (n - 1) u |ty| each side): <= n eps |ty|.
+  EXPECT_NEAR(t[0].y, ty, tol(1e-12, (n_grain + 4) * kFloatEps * std::abs(ty)));
 }
 
 }  // namespace

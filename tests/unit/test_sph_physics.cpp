@@ -3,10 +3,12 @@
 // linear fields.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <vector>
 
+#include "precision.hpp"
 #include "sph/continuity.hpp"
 #include "sph/eos.hpp"
 #include "sph/kernel.hpp"
@@ -15,6 +17,18 @@
 
 namespace sphdem {
 namespace {
+
+using test::kFloatEps;
+using test::tol;
+
+// Float round-off of a Tait pressure p = B ((rho/rho0)^7 - 1): rho/rho0 and its 7th power are
+// rounded relative to B x^7 = B + p, not to p, so the pressure carries an absolute error of
+// n_roundings u (B + |p|) (u = eps/2), gamma = 7 times for each rounding of x. Direct
+// (x = rho/rho0, x^7, pow, B's 3 roundings, the product): ~12 u = 6 eps; through tait_density
+// first (1 + p/B, pow, rho0 times it: ~3 u more in x, 7 x 3 u in x^7): ~24 u = 12 eps.
+double tait_tol(const EosParams& e, double p, double eps_count) {
+  return eps_count * kFloatEps * (double(e.b) + std::abs(p));
+}
 
 TEST(SphKernel, IntegratesToOneIn2DAnd3D) {
   const Real h = 0.1;
@@ -34,11 +48,32 @@ TEST(SphKernel, IntegratesToOneIn2DAnd3D) {
 }
 
 TEST(SphKernel, DerivativeMatchesFiniteDifference) {
-  const KernelParams k = make_kernel(3, 0.05);
+  const Real h = 0.05;
+  const KernelParams k = make_kernel(3, h);
   for (Real r : {0.001, 0.02, 0.05, 0.08, 0.099}) {
-    const Real e = 1e-7;
+    // Float: W carries ~6 roundings plus those of a = 1 - q/2 (~2 u absolute, so 8 u / a
+    // relative in a^4; u = eps/2), and the difference quotient turns that into
+    // rho(r+e) W(r+e) + rho(r-e) W(r-e) over 2e: with e = 1e-7 that is ~10^3, more than dW/dr
+    // itself near r = 0. The float build takes e = 2^-13 (r +- e and their difference are then
+    // exact) and bounds the quotient's error by that round-off, the central difference's
+    // truncation e^2/6 |W'''| (W''' = -(5 alpha / h^3) 1.5 (q - 1)(q - 2): a quadratic in q, so
+    // its largest size over [r - e, r + e] is at an end, q = 1.5 lying in none of these
+    // intervals) and the round-off of kernel_f itself (~6 u + 6 u / a relative).
+    const Real e = Real(tol(1e-7, 0x1p-13));
     const Real dwdr = (kernel_w(k, r + e) - kernel_w(k, r - e)) / (2 * e);
-    EXPECT_NEAR(kernel_f(k, r) * r, dwdr, 1e-6 * std::abs(dwdr) + 1e-6) << "r = " << r;
+    const double u = kFloatEps / 2;
+    auto a_of = [&](double x) { return 1 - x / h / 2; };
+    auto rho = [&](double x) { return (6 + 8 / a_of(x)) * u; };
+    auto w3 = [&](double x) {
+      const double q = x / h;
+      return 5 * k.alpha / (h * h * h) * 1.5 * std::abs((q - 1) * (q - 2));
+    };
+    const double round_off =
+        (rho(r + e) * kernel_w(k, r + e) + rho(r - e) * kernel_w(k, r - e)) / (2 * e) +
+        (6 + 6 / a_of(r)) * u * std::abs(dwdr);
+    const double truncation = e * e / 6 * std::max(w3(r - e), w3(r + e));
+    EXPECT_NEAR(kernel_f(k, r) * r, dwdr, tol(1e-6 * std::abs(dwdr) + 1e-6, round_off + truncation))
+        << "r = " << r;
   }
   EXPECT_EQ(kernel_w(k, 0.1), 0);
   EXPECT_EQ(kernel_f(k, 0.1000001), 0);
@@ -48,9 +83,10 @@ TEST(SphKernel, DerivativeMatchesFiniteDifference) {
 TEST(SphEos, TaitAndInverse) {
   const EosParams e = make_eos(1000, 30, 7);
   EXPECT_DOUBLE_EQ(tait_pressure(e, 1000), 0);
-  EXPECT_NEAR(tait_pressure(e, 1010), 1000 * 900 / 7.0 * (std::pow(1.01, 7) - 1), 1e-6);
+  const double p1010 = 1000 * 900 / 7.0 * (std::pow(1.01, 7) - 1);
+  EXPECT_NEAR(tait_pressure(e, 1010), p1010, tol(1e-6, tait_tol(e, p1010, 6)));
   for (Real p : {0.0, 10.0, 5000.0, -200.0})
-    EXPECT_NEAR(tait_pressure(e, tait_density(e, p)), p, 1e-7);
+    EXPECT_NEAR(tait_pressure(e, tait_density(e, p)), p, tol(1e-7, tait_tol(e, p, 12)));
   EXPECT_NEAR(tait_sound_speed(e, 1000), 30, 1e-12);
 }
 
@@ -58,8 +94,9 @@ TEST(SphEos, TaitAndInverse) {
 TEST(SphEos, PressureFloor) {
   const EosParams e = make_eos(1000, 30, 7, -500);
   EXPECT_DOUBLE_EQ(tait_pressure(e, 900), -500);
-  EXPECT_NEAR(tait_pressure(e, 1010), 1000 * 900 / 7.0 * (std::pow(1.01, 7) - 1), 1e-6);
-  EXPECT_NEAR(tait_pressure(e, tait_density(e, -200)), -200, 1e-7);
+  const double p1010 = 1000 * 900 / 7.0 * (std::pow(1.01, 7) - 1);
+  EXPECT_NEAR(tait_pressure(e, 1010), p1010, tol(1e-6, tait_tol(e, p1010, 6)));
+  EXPECT_NEAR(tait_pressure(e, tait_density(e, -200)), -200, tol(1e-7, tait_tol(e, -200, 12)));
   EXPECT_LT(tait_pressure(make_eos(1000, 30, 7), 900), -500);  // default: no floor
 }
 
@@ -67,7 +104,8 @@ TEST(SphEos, PressureFloor) {
 // longer resists expansion. Without a floor nothing is clamped.
 TEST(SphEos, DensityFloorMatchesThePressureFloor) {
   const EosParams e = make_eos(1000, 30, 7, -500);
-  EXPECT_NEAR(tait_pressure(e, e.rho_floor), -500, 1e-8);
+  // Float: rho_floor = rho0 (1 + p_min/B)^(1/7) and back, as a round trip through tait_density.
+  EXPECT_NEAR(tait_pressure(e, e.rho_floor), -500, tol(1e-8, tait_tol(e, -500, 12)));
   EXPECT_LT(e.rho_floor, 1000);
   EXPECT_DOUBLE_EQ(floor_density(e, 900), e.rho_floor);
   EXPECT_DOUBLE_EQ(floor_density(e, 1001), 1001);
@@ -84,11 +122,11 @@ TEST(SphMdbc, PenetrationControlMirrorsOnlyApproach) {
   const Vec3 r_fb(0.001, 0, 0.004);  // the fluid particle above the wall particle
   for (const Vec3 nb : {n, Vec3(0, 0, -1)}) {
     const Vec3 in = wall_continuity_velocity(Vec3(0.3, 0.1, -0.2), r_fb, nb);
-    EXPECT_DOUBLE_EQ(in.x, 0.3);
-    EXPECT_DOUBLE_EQ(in.y, 0.1);
-    EXPECT_DOUBLE_EQ(in.z, -0.4);
+    EXPECT_DOUBLE_EQ(in.x, Real(0.3));  // tangential: unchanged
+    EXPECT_DOUBLE_EQ(in.y, Real(0.1));
+    EXPECT_REAL_EQ(in.z, -0.4);  // the approach doubled
     const Vec3 out = wall_continuity_velocity(Vec3(0.3, 0.1, 0.2), r_fb, nb);
-    EXPECT_DOUBLE_EQ(out.z, 0.2);
+    EXPECT_DOUBLE_EQ(out.z, Real(0.2));  // receding: unchanged
   }
   // A fluid particle on the other face of a thin wall (below it) approaching from below.
   const Vec3 below = wall_continuity_velocity(Vec3(0, 0, 0.5), Vec3(0, 0, -0.004), n);
@@ -193,6 +231,15 @@ TEST(SphMomentum, ViscosityOpposesRelativeMotion) {
       0);
 }
 
+// Float round-off of the mDBC density of a ~1000 kg/m^3 field: the moment sums over the N fluid
+// terms carry up to N u (u = eps/2) of the background density's weight, and the gradient
+// unknowns are differences of such sums in which the background cancels, so their error is of
+// order N u rho / h, extrapolated over |r_b - r_g| <= 1.5 h: ~2 N u rho = N eps rho, doubled for
+// the elimination of the 3x3 or 4x4 system. The Shepard fallback misses by > 0.1, above this.
+double mdbc_float_tol(int terms) {
+  return 2 * terms * kFloatEps * 1000;
+}
+
 // mDBC: with fluid on a lattice carrying a linear density field, the corrected interpolation
 // recovers the field exactly at the ghost node and extrapolates it to the boundary particle.
 TEST(SphMdbc, RecoversLinearFieldExactly) {
@@ -205,6 +252,7 @@ TEST(SphMdbc, RecoversLinearFieldExactly) {
     const Vec3 boundary(0.0, 0.0, -0.015);
     MdbcSums s;
     const int n = 6;
+    int terms = 0;
     for (int i = -n; i <= n; ++i)
       for (int l = (dim == 3 ? -n : 0); l <= (dim == 3 ? n : 0); ++l)
         for (int j = 0; j <= 2 * n; ++j) {
@@ -214,9 +262,10 @@ TEST(SphMdbc, RecoversLinearFieldExactly) {
           if (r >= 2 * h) continue;
           const Real vol = std::pow(dp, Real(dim));
           mdbc_accumulate(s, vol, rho(x), Vec3(), d, kernel_w(k, r), kernel_f(k, r));
+          ++terms;
         }
     const Real rho_b = mdbc_boundary_density(s, dim, boundary - ghost, 1000, 1e-3, h);
-    EXPECT_NEAR(rho_b, rho(boundary), 1e-9) << "dim " << dim;
+    EXPECT_NEAR(rho_b, rho(boundary), tol(1e-9, mdbc_float_tol(terms))) << "dim " << dim;
     // A plain Shepard average (the fallback) would not be exact on this field.
     EXPECT_GT(std::abs(s.b[0] / s.shepard - rho(boundary)), 0.1);
   }
@@ -238,6 +287,7 @@ TEST(SphMdbc, CornerGhostRecoversLinearFieldAtAnyScale) {
       const Vec3 ghost = -boundary;
       MdbcSums s;
       const int n = 6;
+      int terms = 0;
       for (int i = 0; i <= n; ++i)
         for (int l = 0; l <= (dim == 3 ? n : 0); ++l)
           for (int j = 0; j <= n; ++j) {
@@ -247,9 +297,11 @@ TEST(SphMdbc, CornerGhostRecoversLinearFieldAtAnyScale) {
             if (r >= 2 * h) continue;
             mdbc_accumulate(s, std::pow(dp, Real(dim)), rho(x), Vec3(), d, kernel_w(k, r),
                             kernel_f(k, r));
+            ++terms;
           }
       const Real rho_b = mdbc_boundary_density(s, dim, boundary - ghost, 1000, 1e-3, h);
-      EXPECT_NEAR(rho_b, rho(boundary), 1e-9 * 1000) << "dim " << dim << " dp " << dp;
+      EXPECT_NEAR(rho_b, rho(boundary), tol(1e-9 * 1000, mdbc_float_tol(terms)))
+          << "dim " << dim << " dp " << dp;
       EXPECT_GT(std::abs(s.b[0] / s.shepard - rho(boundary)), 0.1);  // Shepard is not exact
     }
   }

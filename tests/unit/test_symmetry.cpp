@@ -12,6 +12,7 @@
 #include "diagnostics/mirror.hpp"
 #include "diagnostics/probes.hpp"
 #include "io/scene_yaml.hpp"
+#include "precision.hpp"
 #include "scene/build.hpp"
 #include "solver/fluid_params.hpp"
 #include "solver/mirror_exchange.hpp"
@@ -41,9 +42,9 @@ SymmetryPlane plane_y(Real at, int keep) {
 
 TEST(SymmetryPlane, ReflectsPointsVectorsAndTensors) {
   const SymmetryPlane s = plane_y(0.1, -1);
-  EXPECT_DOUBLE_EQ(s.side(Vec3(0, 0.05, 0)), 0.05);  // keep = -1: y < 0.1 is the modelled side
+  EXPECT_REAL_EQ(s.side(Vec3(0, 0.05, 0)), 0.05);  // keep = -1: y < 0.1 is the modelled side
   const Vec3 p = s.reflect_point(Vec3(1, 0.07, 2));
-  EXPECT_DOUBLE_EQ(p.y, 0.13);
+  EXPECT_REAL_EQ(p.y, 0.13);
   EXPECT_DOUBLE_EQ(p.x, 1);
   const Vec3 v = s.reflect_vector(Vec3(1, 2, 3));
   EXPECT_DOUBLE_EQ(v.y, -2);
@@ -84,9 +85,10 @@ TEST(MirrorExchange, HaloIsTheReflectedFluidNearThePlane) {
   EXPECT_EQ(ps.n_wall, 1);
   EXPECT_EQ(ps.id[ps.wall_begin()], 9u);  // the wall moved behind the halo
   const Index h0 = ps.n_fluid;
-  EXPECT_DOUBLE_EQ(ps.pos[h0].y, -0.05);
-  EXPECT_DOUBLE_EQ(ps.pos[h0 + 1].y, -0.25);
-  EXPECT_DOUBLE_EQ(ps.pos[h0 + 2].y, -0.1);
+  // A plane at 0 negates y exactly: the images are the owners' values (as Real) negated.
+  EXPECT_DOUBLE_EQ(ps.pos[h0].y, Real(-0.05));
+  EXPECT_DOUBLE_EQ(ps.pos[h0 + 1].y, Real(-0.25));
+  EXPECT_DOUBLE_EQ(ps.pos[h0 + 2].y, Real(-0.1));
   EXPECT_DOUBLE_EQ(ps.vel[h0].y, -2);
   EXPECT_DOUBLE_EQ(ps.vel[h0].x, 1);
   EXPECT_DOUBLE_EQ(ps.rho[h0 + 2], 1003);
@@ -96,11 +98,11 @@ TEST(MirrorExchange, HaloIsTheReflectedFluidNearThePlane) {
                              Vec3(0, 0.04, 0)};
   std::vector<Vec3> halo(3);
   ex.bcast_positions(owned.data(), halo.data());
-  EXPECT_DOUBLE_EQ(halo[2].y, -0.04);
+  EXPECT_DOUBLE_EQ(halo[2].y, Real(-0.04));
   ex.bcast_field(owned.data(), halo.data(), HaloField::kVelocity);
-  EXPECT_DOUBLE_EQ(halo[1].y, -0.02);
+  EXPECT_DOUBLE_EQ(halo[1].y, Real(-0.02));
   ex.bcast_field(owned.data(), halo.data(), HaloField::kValue);
-  EXPECT_DOUBLE_EQ(halo[1].y, 0.02);
+  EXPECT_DOUBLE_EQ(halo[1].y, Real(0.02));
   std::vector<Vec3> off = {Vec3(1, 2, 3), Vec3(), Vec3(), Vec3()};
   ex.bcast_field(off.data(), halo.data(), HaloField::kOffDiagonal);
   EXPECT_DOUBLE_EQ(halo[0].x, -1);
@@ -114,10 +116,10 @@ TEST(MirrorExchange, HaloIsTheReflectedFluidNearThePlane) {
 // A wall's ghost node across the plane widens the halo to 2h (the support) past it.
 TEST(MirrorExchange, HaloReachesPastTheDeepestGhostNode) {
   MirrorExchange ex(plane_y(0, 1), 0.3, 0.2);
-  EXPECT_DOUBLE_EQ(ex.width(), 0.3);
+  EXPECT_DOUBLE_EQ(ex.width(), Real(0.3));  // the width as given
   const Vec3 pos(0, -0.05, 0), ghost(0, -0.15, 0);
   ex.keep_walls(&pos, &ghost, 1, true);
-  EXPECT_DOUBLE_EQ(ex.width(), 0.35);
+  EXPECT_REAL_EQ(ex.width(), 0.35);  // 0.15 + 0.2, one rounding
 }
 
 // The build models one side: half the fluid of the symmetric pillar scene, the walls beyond 2h
@@ -193,7 +195,7 @@ TEST(SymmetryDiagnostics, MirrorFullDoublesTheFluidAndPairsTheForces) {
   const ParticleSet<Host> f = mirror_full(ps, s, {0, 2, 1});
   EXPECT_EQ(f.n_fluid, 2);
   EXPECT_EQ(f.n_wall, 6);
-  EXPECT_DOUBLE_EQ(f.pos[1].y, 0.08);
+  EXPECT_REAL_EQ(f.pos[1].y, 0.08);  // 2 (0.1) - 0.12
   const Energy e = probe_energy(f, Vec3(0, 0, -10));
   EXPECT_DOUBLE_EQ(e.kinetic, 2 * 0.5 * 2 * 2);
   EXPECT_DOUBLE_EQ(e.momentum.y, 0);
