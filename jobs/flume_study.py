@@ -44,7 +44,7 @@ BOULDERS = os.path.join(ROOT, "inputs", "flume", "flume_boulders.yaml")
 # The seed's solid volume fractions (§5.3) as bead counts: fraction x 3.46 L / (pi 0.016^3 / 6).
 FRACTIONS = [("0", 0), ("0.167%", 3), ("0.334%", 5), ("0.822%", 13), ("1.176%", 19)]
 SYMMETRY = "symmetry={axis: y, at: 0.2}"
-BARRIER_X = 0.6  # the barrier row of inputs/flume/flume.yaml (barrier.x)
+BARRIER_X = 0.6  # the barrier row of inputs/flume/flume*.yaml (barrier.x), unless --set
 IRREGULAR = ("dem.shapes[0]={name: bead, type: polyhedron, diameter: 0.016, planes: 12, "
              "variants: 8, seed: 3}")
 
@@ -148,8 +148,10 @@ def summarize(run_dir, until=float("inf")):
             if fr[i][0] - fr[j][0] >= 0.04:
                 speed = max(speed, (fr[i][1] - fr[j][1]) / (fr[i][0] - fr[j][0]))
     grains_up = grains_down = float("nan")
-    if tr and len(tr[-1]) > 4:
-        grains_up, grains_down = tr[-1][3], tr[-1][4]
+    if tr and len(tr[-1]) > 3:
+        grains_up = tr[-1][3]
+    if tr and len(tr[-1]) > 4:  # older trap.csv files stop at grains_upstream
+        grains_down = tr[-1][4]
     # Wall time and steps of the whole run (summary.json; absent while a run is going).
     wall_s, steps = float("nan"), float("nan")
     try:
@@ -256,6 +258,10 @@ def main():
     with_grains = [r for r in results
                    if os.path.exists(os.path.join(a.out, r["preset"], "bodies.csv"))]
     if with_grains:
+        barrier_x = BARRIER_X  # or the last --set barrier.x=...
+        for opt in a.sets:
+            if opt.replace(" ", "").startswith("barrier.x="):
+                barrier_x = float(opt.split("=", 1)[1])
         fig, axes = plt.subplots(1, len(with_grains), figsize=(3.5 * len(with_grains), 3.5),
                                  sharey=True, squeeze=False)
         for ax, r in zip(axes[0], with_grains):
@@ -268,7 +274,7 @@ def main():
                 tracks[int(q[iid])][1].append(q[ix])
             for tt, xx in tracks.values():
                 ax.plot(tt, xx, linewidth=0.8)
-            ax.axhline(BARRIER_X, color="k", linestyle="--", linewidth=0.8)
+            ax.axhline(barrier_x, color="k", linestyle="--", linewidth=0.8)
             ax.set_title(r["preset"])
             ax.set_xlabel("t (s)")
         axes[0][0].set_ylabel("boulder x along the channel (m)\n(barrier row dashed)")
