@@ -436,6 +436,10 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
   auto solver =
       make_solver(one_step ? capped : scene, opt.backend, slog, &rep, &ex, opt.procs, prepare);
   std::vector<Vec3> grain_force, grain_torque;
+  if (coupling && ex)  // many ranks: each rank holds the grain particles near its box
+    solver->set_grain_source(
+        [&](const Vec3& lo, const Vec3& hi) { return coupling->generate(*dem.system, lo, hi); },
+        coupling->particle_count());
   if (coupling) {
     slog << "grains: " << dem.system->bodies().size() << " in the fluid, "
          << coupling->particle_count() << " grain boundary particles; DEM step " << dem.dt
@@ -661,7 +665,8 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
       });
       if (coupling)  // the grain boundary particles take the grains' poses at t^n
         timed(lt.coupling, [&] {
-          solver->move_grains([&](ParticleSet<Host>& ps) { coupling->place(ps, *dem.system); });
+          solver->move_grains(
+              [&](ParticleSet<Host>& ps) { coupling->place(ps, *dem.system, !ex); });
         });
       const StepStats st = solver->step();
       if (coupling) {
@@ -669,7 +674,24 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
         // sub-steps no longer than the DEM step (contacts between grains and with walls).
         dem::DemSystem& sys = *dem.system;
         timed(lt.coupling, [&] {
-          coupling->loads(solver->host_particles(), sys, grain_force, grain_torque);
+          if (ex) {  // this rank's owned grain slots, then one sum over ranks (DESIGN.md §5)
+            const std::vector<std::uint8_t> mine = solver->wall_mine();
+            coupling->loads(solver->host_particles(), sys, grain_force, grain_torque, mine.data());
+            std::vector<Real> ft(6 * grain_force.size());
+            for (std::size_t i = 0; i < grain_force.size(); ++i)
+              for (int a = 0; a < 3; ++a) {
+                ft[6 * i + std::size_t(a)] = grain_force[i][a];
+                ft[6 * i + 3 + std::size_t(a)] = grain_torque[i][a];
+              }
+            ex->sum(ft.data(), Index(ft.size()));
+            for (std::size_t i = 0; i < grain_force.size(); ++i)
+              for (int a = 0; a < 3; ++a) {
+                grain_force[i][a] = ft[6 * i + std::size_t(a)];
+                grain_torque[i][a] = ft[6 * i + 3 + std::size_t(a)];
+              }
+          } else {
+            coupling->loads(solver->host_particles(), sys, grain_force, grain_torque);
+          }
           for (std::size_t i = 0; i < gradient_force.size(); ++i)
             grain_force[i] += gradient_force[i];
           for (std::size_t i = 0; i < sys.bodies().size(); ++i)
@@ -818,6 +840,13 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
     log << "ranks: " << ex->size() << ", halo rebuilt at " << solver->halo_rebuilds() << " of "
         << r.steps << " steps, rebalanced " << ex->rebalance_count()
         << " times, owned-fluid imbalance at the last check " << ex->last_imbalance() << "\n";
+  if (ex && coupling) {  // DESIGN.md §5: each rank holds only the grain particles near its box
+    const Real n = Real(solver->host_particles().n_grain);
+    Real held[2] = {n, -n};
+    ex->max(held, 2);
+    log << "grain boundary particles held per rank (owned + copies): " << -held[1] << " to "
+        << held[0] << " of " << coupling->particle_count() << "\n";
+  }
   if (r.removed > 0)
     log << "removed (open ends): " << r.removed << " particles, " << r.removed_mass << " kg\n";
   log << "done: " << r.steps << " steps, t = " << r.sim_time << " s, " << r.wall_seconds

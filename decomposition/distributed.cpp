@@ -192,16 +192,13 @@ ParticleSet<Host> gather_on_root(MPI_Comm comm, const ParticleSet<Host>& ps,
   return fl;
 }
 
-std::vector<std::uint8_t> MpiExchange::keep_walls(const Vec3* pos, const Vec3* ghost, Index n,
-                                                  bool by_ghost) const {
-  // This rank's box, with the outer faces of non-periodic axes (and y in 2D) at infinity, as in
-  // owner_of.
+void MpiExchange::owned_box(Vec3& lo, Vec3& hi) const {
+  // The outer faces of non-periodic axes (and y in 2D) at infinity, as in owner_of.
   constexpr Real kInf = std::numeric_limits<Real>::infinity();
   const Vec3 blo = dd_.owned_lo(), bhi = dd_.owned_hi();
   const auto np = dd_.procs();
   const auto pc = dd_.proc_coord(dd_.rank());
   const CellGrid& g = dd_.grid();
-  Real lo[3], hi[3];
   for (int k = 0; k < 3; ++k) {
     lo[k] = blo[k];
     hi[k] = bhi[k];
@@ -209,6 +206,18 @@ std::vector<std::uint8_t> MpiExchange::keep_walls(const Vec3* pos, const Vec3* g
     if (open && pc[std::size_t(k)] == 0) lo[k] = -kInf;
     if (open && pc[std::size_t(k)] == np[std::size_t(k)] - 1) hi[k] = kInf;
   }
+}
+
+void MpiExchange::build_grain_halo(ParticleSet<Host>& g) {
+  grains_.reset();
+  grains_.emplace(dd_, g, width_);
+  grains_->fill(g);
+}
+
+std::vector<std::uint8_t> MpiExchange::keep_walls(const Vec3* pos, const Vec3* ghost, Index n,
+                                                  bool by_ghost) const {
+  Vec3 lo, hi;
+  owned_box(lo, hi);
   std::vector<std::uint8_t> keep(static_cast<std::size_t>(n));
   const Real w2 = width_ * width_;
   for (Index i = 0; i < n; ++i) {
@@ -241,7 +250,7 @@ void distribute_after_read(const MpiExchange& ex, ParticleSet<Host>& ps) {
   });
   ps.n_wall = Index(nw_all);
   ps.n_grain = 0;
-  grains_last(ps);  // every rank now holds every grain particle: after the walls
+  grains_last(ps);  // every grain particle, after the walls, until the first rebuild
   // Fluid: to its owner, however far.
   redistribute(ex.decomposition(), ps);
 }

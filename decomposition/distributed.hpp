@@ -2,7 +2,8 @@
 // the run loop needs around it (initial distribution, output shares, gathering for diagnostics,
 // redistribution after a restart).
 //
-// Data layout on a rank: owned fluid [0, n_fluid), halo copies, then every fixed-wall particle.
+// Data layout on a rank: owned fluid [0, n_fluid), halo copies, then the fixed-wall particles near
+// its box, then the grain particles it owns and its copies of other ranks' near its box.
 // Walls are replicated (built identically on every rank); each wall's mDBC state is computed by
 // the rank owning its ghost node and summed over ranks, and the fluid force on a wall particle is
 // held as per-rank shares that add up. Checkpoints and frames take the walls from rank 0 only.
@@ -55,6 +56,12 @@ class MpiExchange final : public Exchange {
   void wall_bcast(Vec3* f) override { walls_->bcast(f); }
   void wall_reduce(Real* f) override { walls_->reduce_sum(f); }
   void wall_reduce(Vec3* f) override { walls_->reduce_sum(f); }
+  void owned_box(Vec3& lo, Vec3& hi) const override;
+  void build_grain_halo(ParticleSet<Host>& g) override;
+  void grain_bcast(const Real* owned, Real* halo) override { grains_->bcast(owned, halo); }
+  void grain_bcast(const Vec3* owned, Vec3* halo) override { grains_->bcast(owned, halo); }
+  void grain_reduce(const Real* halo, Real* owned) override { grains_->reduce_sum(halo, owned); }
+  void grain_reduce(const Vec3* halo, Vec3* owned) override { grains_->reduce_sum(halo, owned); }
   void sum(Real* v, Index n) override;
   void max(Real* v, Index n) override;
   std::int64_t sum(std::int64_t v) override;
@@ -67,6 +74,7 @@ class MpiExchange final : public Exchange {
   double last_imbalance_ = 1;
   std::optional<HaloPlan> plan_;
   std::optional<WallPlan> walls_;
+  std::optional<HaloPlan> grains_;  // owned grain particles to the ranks near them
 };
 
 // Keeps the fluid this rank owns out of a set every rank built alike; walls stay.

@@ -40,14 +40,33 @@ GrainCoupling::GrainCoupling(const dem::DemSystem& sys, Real dp, Real depth, Rea
   if (dim != 3) throw InputError("grains in a fluid need dimension: 3");
   int nt = 0;
   for (const dem::RigidBody& b : sys.bodies()) nt = std::max(nt, b.shape + 1);
-  for (int t = 0; t < nt; ++t) shapes_.push_back(make_grain_boundary(sys.shape(t), dp, depth));
-  for (std::size_t i = 0; i < sys.bodies().size(); ++i) {
-    const GrainBoundaryShape& s = shapes_[std::size_t(sys.bodies()[i].shape)];
-    for (std::size_t k = 0; k < s.pos.size(); ++k) {
-      owner_.push_back(std::uint32_t(i));
-      point_.push_back(std::uint32_t(k));
-    }
+  for (int t = 0; t < nt; ++t) {
+    shapes_.push_back(make_grain_boundary(sys.shape(t), dp, depth));
+    Real r2 = 0;
+    for (std::size_t k = 0; k < shapes_.back().pos.size(); ++k)
+      r2 = std::max({r2, norm2(shapes_.back().pos[k]), norm2(shapes_.back().ghost[k])});
+    reach_.push_back(std::sqrt(r2));
   }
+  first_point_.push_back(0);
+  for (const dem::RigidBody& b : sys.bodies())
+    first_point_.push_back(first_point_.back() + Index(shapes_[std::size_t(b.shape)].pos.size()));
+}
+
+void GrainCoupling::locate(std::size_t k, std::size_t& grain, std::size_t& point) const {
+  const auto it = std::upper_bound(first_point_.begin(), first_point_.end(), Index(k));
+  grain = std::size_t(it - first_point_.begin()) - 1;
+  point = k - std::size_t(first_point_[grain]);
+}
+
+void GrainCoupling::pose(ParticleSet<Host>& ps, std::size_t i, const dem::RigidBody& body,
+                         std::size_t p) const {
+  const GrainBoundaryShape& s = shapes_[std::size_t(body.shape)];
+  const Vec3 x = body.x + rotate(body.q, s.pos[p]);
+  ps.pos[i] = x;
+  ps.ghost[i] = body.x + rotate(body.q, s.ghost[p]);
+  ps.ghost_alt[i] = ps.ghost[i];
+  ps.normal[i] = rotate(body.q, s.normal[p]);
+  ps.vel[i] = dem::point_velocity(body, x);
 }
 
 Index GrainCoupling::append(ParticleSet<Host>& ps, const dem::DemSystem& sys) {
@@ -80,51 +99,76 @@ Index GrainCoupling::append(ParticleSet<Host>& ps, const dem::DemSystem& sys) {
   ps.resize(n_old + particle_count());
   ps.n_grain += particle_count();
   const Index at = n_old;
-  for (Index k = 0; k < particle_count(); ++k) {
-    const std::size_t i = std::size_t(at + k);
-    ps.id[i] = first_id_ + GlobalId(k);
-    ps.mass[i] = mass_;
-    ps.rho[i] = ps.rho_prev[i] = rho0_;
-    ps.press[i] = 0;
-    ps.body[i] = kGrainBodyBase - std::int32_t(owner_[std::size_t(k)]);
-  }
+  for (std::size_t g = 0; g + 1 < first_point_.size(); ++g)
+    for (Index k = first_point_[g]; k < first_point_[g + 1]; ++k) {
+      const std::size_t i = std::size_t(at + k);
+      ps.id[i] = first_id_ + GlobalId(k);
+      ps.mass[i] = mass_;
+      ps.rho[i] = ps.rho_prev[i] = rho0_;
+      ps.press[i] = 0;
+      ps.body[i] = kGrainBodyBase - std::int32_t(g);
+    }
   place(ps, sys);
   return removed;
 }
 
-void GrainCoupling::place(ParticleSet<Host>& ps, const dem::DemSystem& sys) const {
-  // The solver sorts walls and grain particles together by cell: grain slots are those whose
-  // body field marks a grain.
+ParticleSet<Host> GrainCoupling::generate(const dem::DemSystem& sys, const Vec3& lo,
+                                          const Vec3& hi) const {
+  ParticleSet<Host> out;
+  for (std::size_t g = 0; g < sys.bodies().size(); ++g) {
+    const dem::RigidBody& b = sys.bodies()[g];
+    Real d2 = 0;  // the box's distance from the centroid
+    for (int a = 0; a < 3; ++a) {
+      const Real d = b.x[a] < lo[a] ? lo[a] - b.x[a] : (b.x[a] > hi[a] ? b.x[a] - hi[a] : 0);
+      d2 += d * d;
+    }
+    const Real r = reach_[std::size_t(b.shape)];
+    if (d2 > r * r) continue;
+    const Index n0 = out.n_grain, np = first_point_[g + 1] - first_point_[g];
+    out.n_grain += np;
+    out.resize(out.n_grain);
+    for (Index k = 0; k < np; ++k) {
+      const std::size_t i = std::size_t(n0 + k);
+      out.id[i] = first_id_ + GlobalId(first_point_[g] + k);
+      out.mass[i] = mass_;
+      out.rho[i] = out.rho_prev[i] = rho0_;
+      out.press[i] = 0;
+      out.body[i] = kGrainBodyBase - std::int32_t(g);
+      pose(out, i, b, std::size_t(k));
+    }
+  }
+  return out;
+}
+
+void GrainCoupling::place(ParticleSet<Host>& ps, const dem::DemSystem& sys, bool every) const {
+  // The solver sorts the grain range by cell: grain slots are those whose body field marks a
+  // grain.
   Index seen = 0;
   for (Index i = ps.wall_begin(); i < ps.size(); ++i) {
     if (!is_grain_body(ps.body[std::size_t(i)])) continue;
     const std::size_t k = std::size_t(ps.id[std::size_t(i)] - first_id_);
-    if (k >= owner_.size())
+    if (ps.id[std::size_t(i)] < first_id_ || k >= std::size_t(particle_count()))
       throw std::logic_error("GrainCoupling::place: slot " + std::to_string(i) + " has id " +
                              std::to_string(ps.id[std::size_t(i)]) + ", first grain id " +
                              std::to_string(first_id_));
     ++seen;
-    const dem::RigidBody& body = sys.bodies()[owner_[k]];
-    const GrainBoundaryShape& s = shapes_[std::size_t(body.shape)];
-    const std::size_t p = point_[k];
-    const Vec3 x = body.x + rotate(body.q, s.pos[p]);
-    ps.pos[std::size_t(i)] = x;
-    ps.ghost[std::size_t(i)] = body.x + rotate(body.q, s.ghost[p]);
-    ps.ghost_alt[std::size_t(i)] = ps.ghost[std::size_t(i)];
-    ps.normal[std::size_t(i)] = rotate(body.q, s.normal[p]);
-    ps.vel[std::size_t(i)] = dem::point_velocity(body, x);
+    std::size_t g = 0, p = 0;
+    locate(k, g, p);
+    pose(ps, std::size_t(i), sys.bodies()[g], p);
   }
-  if (seen != particle_count())
+  if (every && seen != particle_count())
     throw std::logic_error("GrainCoupling::place: " + std::to_string(seen) + " grain slots for " +
                            std::to_string(particle_count()) + " particles");
 }
 
 void GrainCoupling::loads(const ParticleSet<Host>& ps, const dem::DemSystem& sys,
-                          std::vector<Vec3>& force, std::vector<Vec3>& torque) const {
+                          std::vector<Vec3>& force, std::vector<Vec3>& torque,
+                          const std::uint8_t* mine) const {
   force.assign(sys.bodies().size(), Vec3());
   torque.assign(sys.bodies().size(), Vec3());
   for (Index i = ps.wall_begin(); i < ps.size(); ++i) {
     if (!is_grain_body(ps.body[std::size_t(i)])) continue;
+    if (mine && !mine[i - ps.wall_begin()]) continue;
     const std::uint32_t g = std::uint32_t(kGrainBodyBase - ps.body[std::size_t(i)]);
     const Vec3 f = ps.acc[std::size_t(i)] * ps.mass[std::size_t(i)];
     force[g] += f;

@@ -12,6 +12,8 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
+#include <stdexcept>
 #include <vector>
 
 #include "core/types.hpp"
@@ -56,10 +58,34 @@ class Exchange {
   virtual void wall_bcast(Vec3* f) = 0;
   virtual void wall_reduce(Real* f) = 0;
   virtual void wall_reduce(Vec3* f) = 0;
+  // Grain boundary particles (DESIGN.md §5, "Grains"): each rank holds those whose ghost node
+  // (DBC: position) its box owns, plus copies of other ranks' within the halo width. Only an
+  // exchange over many ranks implements these; one that owns every point (a symmetry plane's
+  // mirror) never needs them.
+  // This rank's box, with the outer faces of non-periodic axes at infinity.
+  virtual void owned_box(Vec3& lo, Vec3& hi) const {
+    const Real inf = std::numeric_limits<Real>::infinity();
+    lo = Vec3(-inf, -inf, -inf);
+    hi = Vec3(inf, inf, inf);
+  }
+  // Builds the grains' own halo plan over the owned grain particles of g, laid out as fluid
+  // [0, g.n_fluid), and fills g's halo slots with every field (as build_halo). Collective.
+  virtual void build_grain_halo(ParticleSet<Host>&) { no_grains(); }
+  // Owned values to the copies, in the plan's root and leaf order; and the copies' partial sums
+  // added into the owners.
+  virtual void grain_bcast(const Real*, Real*) { no_grains(); }
+  virtual void grain_bcast(const Vec3*, Vec3*) { no_grains(); }
+  virtual void grain_reduce(const Real*, Real*) { no_grains(); }
+  virtual void grain_reduce(const Vec3*, Vec3*) { no_grains(); }
   // In-place reductions over all ranks.
   virtual void sum(Real* v, Index n) = 0;
   virtual void max(Real* v, Index n) = 0;
   virtual std::int64_t sum(std::int64_t v) = 0;
+
+ private:
+  [[noreturn]] static void no_grains() {
+    throw std::logic_error("Exchange: grain halo on an exchange that holds every grain particle");
+  }
 };
 
 }  // namespace sphdem

@@ -73,6 +73,14 @@ class SolverBase {
   // SPH-DEM coupling (lib/coupling): `f` moves the grain boundary slots (positions, ghost nodes,
   // normals, velocities) in host memory; the boundary range is then re-sorted.
   virtual void move_grains(const std::function<void(ParticleSet<Host>&)>& f) = 0;
+  // Many ranks (DESIGN.md §5, "Grains"): no rank holds every grain boundary particle. At each
+  // neighbour rebuild the solver takes from `source` the posed grain particles that may reach its
+  // box [lo, hi] (GrainCoupling::generate), keeps those whose ghost node (DBC: position) it owns,
+  // and receives copies of the other ranks' within the halo width. Between rebuilds `f` of
+  // move_grains poses the slots held. `total`: the grain particles of all ranks, which the owned
+  // ones must add up to at every rebuild. Required on many ranks when there are grains.
+  using GrainSource = std::function<ParticleSet<Host>(const Vec3& lo, const Vec3& hi)>;
+  virtual void set_grain_source(GrainSource source, Index total) = 0;
   // The fluid's body acceleration (default: scene.gravity); a mean pressure gradient G makes it
   // gravity - G / rho0 (scene.hpp PressureGradient). Its direction also orients Fourtakas'
   // hydrostatic density correction, which follows the pressure gradient the fluid carries.

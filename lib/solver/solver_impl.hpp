@@ -10,6 +10,7 @@
 #include <numeric>
 #include <sstream>
 #include <type_traits>
+#include <unordered_map>
 
 #include "core/error.hpp"
 #include "neighbor/cell_list.hpp"
@@ -95,6 +96,7 @@ class Solver final : public SolverBase {
       clock_.add(times_.cell_list, t0, t1);
       fill_halo();
       record_build();
+      rebuild_grains();
       ++rebuilds_;
       clock_.add(times_.halo, t1, tick());
     } else {
@@ -177,7 +179,8 @@ class Solver final : public SolverBase {
     for (Index i = 0; i < particles.size(); ++i) max_id = std::max(max_id, particles.id[i]);
     Real m = Real(max_id) + 1;
     if (ex_) ex_->max(&m, 1);
-    max_id_ = GlobalId(m);
+    // Never lower: on many ranks a later set may hold only some grain particles.
+    max_id_ = std::max(max_id_, GlobalId(m));
     global_fluid_ = ex_ ? Index(ex_->sum(std::int64_t(particles.n_fluid))) : particles.n_fluid;
     grains_last(particles);
     if (ex_) {  // every wall particle into the store; this rank keeps those it can use
@@ -187,7 +190,9 @@ class Solver final : public SolverBase {
       append_grains(particles, std::move(grains));
     }
     to_space(Space{}, std::move(particles), ps_);
-    built_ = false;  // the next step rebuilds the halo
+    built_ = false;  // the next step rebuilds the halo (and, many ranks, the grain slots)
+    grains_built_ = false;
+    grain_at_.clear();
     rate_.resize(std::size_t(ps_.size()));
     sort_boundary();
     if (ex_) mark_wall_owners();
@@ -195,13 +200,19 @@ class Solver final : public SolverBase {
 
   std::vector<std::uint8_t> wall_mine() const override { return mine_host_; }
 
-  // Grains on many ranks: every rank holds every grain particle (the DEM state is replicated) and
-  // places them from the same poses; the rank whose box holds a particle's ghost node computes its
-  // mDBC state, the others zero it, and a sum over ranks gives every rank the owner's values.
+  // Grains on many ranks (set_grain_source): each rank holds the grain particles it owns and
+  // copies of others' near its box, and poses all of them from the replicated DEM state; the
+  // owner computes a particle's mDBC state and the grain halo plan copies it out.
   void move_grains(const std::function<void(ParticleSet<Host>&)>& f) override {
+    if (ex_ && ps_.n_grain > 0 && !grain_source_)
+      throw std::logic_error("Solver::move_grains: grains on many ranks need set_grain_source");
     on_host([&](ParticleSet<Host>& h) { f(h); });
     sort_grains();
-    if (ex_) mark_grain_owners();
+    mark_grain_owners();
+  }
+  void set_grain_source(GrainSource source, Index total) override {
+    grain_source_ = std::move(source);
+    grain_total_ = total;
   }
   std::int64_t halo_rebuilds() const override { return rebuilds_; }
 
@@ -233,9 +244,9 @@ class Solver final : public SolverBase {
         wall_sync(ps_.rho, false);
         wall_sync(ps_.press, false);
         wall_sync(ps_.vel_bc, false);
-        grain_sum(ps_.rho);
-        grain_sum(ps_.press);
-        grain_sum(ps_.vel_bc);
+        grain_sync(ps_.rho, false);
+        grain_sync(ps_.press, false);
+        grain_sync(ps_.vel_bc, false);
       }
     }
     if (p_.hbp || p_.sps) {
@@ -258,12 +269,13 @@ class Solver final : public SolverBase {
       compute_rates(Space{}, v, nl, p_, ps_.wall_begin(), ps_.size(), false, rate_.data());
     }
     if (ex_) {
-      wall_sync(ps_.acc, true);  // the owner holds the whole fluid force on its wall particles
-      grain_sum(ps_.acc);        // every rank holds the whole fluid force on every grain slot
-      if (!p_.mdbc) {            // DBC: the density rate is a sum over all ranks' fluid
+      wall_sync(ps_.acc, true);   // the owner holds the whole fluid force on its wall particles
+      grain_sync(ps_.acc, true);  // and on its grain particles (summed per grain by the caller)
+      if (!p_.mdbc) {             // DBC: the density rate is a sum over all ranks' fluid
         wall_sync(ps_.drho, true);
         wall_sync(ps_.drho, false);
-        grain_sum(ps_.drho);
+        grain_sync(ps_.drho, true);
+        grain_sync(ps_.drho, false);
       }
     }
     auto t2 = tick();
@@ -331,7 +343,10 @@ class Solver final : public SolverBase {
     sort_range(ps_.wall_begin(), ps_.n_wall, boundary_cells_);
     sort_grains();
   }
-  void sort_grains() { sort_range(ps_.wall_begin() + ps_.n_wall, ps_.n_grain, grain_cells_); }
+  void sort_grains() {
+    sort_range(ps_.wall_begin() + ps_.n_wall, ps_.n_grain, grain_cells_);
+    if (grains_built_) follow(grain_at_, grain_cells_);
+  }
   void sort_fluid() { sort_range(0, ps_.n_fluid, fluid_cells_); }
 
   void sort_range(Index begin, Index count, CellList<Space>& cl) {
@@ -572,6 +587,17 @@ class Solver final : public SolverBase {
         if (!(x[k] >= p_.domain_lo[k] && x[k] <= p_.domain_hi[k])) local = 1;
       }
     }
+    if (grain_source_ && !grains_built_) local = 1;
+    if (grains_built_ && !local) {  // grain particles and their ghost nodes (rotation moves them
+      std::vector<Vec3> gtmp;       // further than the particles)
+      const Vec3* ghost = get_host<Vec3>(ps_.ghost, gtmp);
+      const Index gb = ps_.wall_begin() + ps_.n_wall;
+      for (Index k = 0; k < ps_.n_grain; ++k) {
+        const std::size_t t = grain_at_[std::size_t(k)];
+        drift2 = std::max({drift2, norm2(pos[gb + k] - grain_pos_at_build_[t]),
+                           norm2(ghost[gb + k] - grain_ghost_at_build_[t])});
+      }
+    }
     const Real half = Real(0.5) * scene_.parallel.skin * p_.h;
     Real m[2] = {Real(local), drift2};
     ex_->max(m, 2);
@@ -609,16 +635,8 @@ class Solver final : public SolverBase {
     std::iota(perm.begin(), perm.end(), wb);
     std::sort(perm.begin(), perm.end(),
               [&](Index a, Index b) { return ps.id[std::size_t(a)] < ps.id[std::size_t(b)]; });
-    ParticleSet<Host> w;
-    std::vector<void*> out;
-    w.for_each_field([&](const char*, auto& b) { out.push_back(&b); });
-    std::size_t k = 0;
-    ps.for_each_field([&](const char*, auto& b) {
-      auto* o = static_cast<std::decay_t<decltype(b)>*>(out[k++]);
-      o->vec().resize(perm.size());
-      for (std::size_t j = 0; j < perm.size(); ++j) (*o)[j] = b[std::size_t(perm[j])];
-      b.vec().resize(std::size_t(wb));
-    });
+    ParticleSet<Host> w = copy_slots(ps, perm);
+    ps.for_each_field([&](const char*, auto& b) { b.vec().resize(std::size_t(wb)); });
     w.n_wall = n - wb;
     ps.n_wall = 0;
     ps.n_grain = 0;
@@ -630,28 +648,30 @@ class Solver final : public SolverBase {
     const Index n = wall_store_.n_wall;
     const std::vector<std::uint8_t> keep =
         ex_->keep_walls(wall_store_.pos.data(), wall_store_.ghost.data(), n, p_.mdbc);
-    ParticleSet<Host> w;
-    std::vector<void*> out;
-    w.for_each_field([&](const char*, auto& b) { out.push_back(&b); });
-    std::size_t k = 0;
+    std::vector<Index> slots;
+    for (Index i = 0; i < n; ++i)
+      if (keep[std::size_t(i)]) slots.push_back(i);
     auto& store = const_cast<ParticleSet<Host>&>(wall_store_);  // read only
-    store.for_each_field([&](const char*, auto& b) {
-      auto* o = static_cast<std::decay_t<decltype(b)>*>(out[k++]);
-      for (Index i = 0; i < n; ++i)
-        if (keep[std::size_t(i)]) o->vec().push_back(b[std::size_t(i)]);
-    });
-    w.n_wall = Index(w.id.size());
+    ParticleSet<Host> w = copy_slots(store, slots);
+    w.n_wall = Index(slots.size());
     return w;
+  }
+
+  // Calls f(a_field, b_field) for each pair of same-named fields of two host sets.
+  template <class F>
+  static void zip_fields(ParticleSet<Host>& a, ParticleSet<Host>& b, F&& f) {
+    std::vector<void*> from;
+    b.for_each_field([&](const char*, auto& field) { from.push_back(&field); });
+    std::size_t k = 0;
+    a.for_each_field([&](const char*, auto& field) {
+      f(field, *static_cast<std::decay_t<decltype(field)>*>(from[k++]));
+    });
   }
 
   // Appends every field of `src` to the end of `ps` (counts are the caller's).
   static void append_fields(ParticleSet<Host>& ps, ParticleSet<Host>& src) {
-    std::vector<void*> from;
-    src.for_each_field([&](const char*, auto& b) { from.push_back(&b); });
-    std::size_t k = 0;
-    ps.for_each_field([&](const char*, auto& b) {
-      auto* s = static_cast<std::decay_t<decltype(b)>*>(from[k++]);
-      b.vec().insert(b.vec().end(), s->vec().begin(), s->vec().end());
+    zip_fields(ps, src, [](auto& d, auto& s) {
+      d.vec().insert(d.vec().end(), s.vec().begin(), s.vec().end());
     });
   }
 
@@ -693,16 +713,11 @@ class Solver final : public SolverBase {
     h.for_each_field([&](const char*, auto& b) { b.vec().resize(std::size_t(h.n_fluid)); });
     h.n_halo = 0;
     ParticleSet<Host>& all = ex_ ? wall_store_ : walls;
-    ParticleSet<Host> kept;
-    std::vector<void*> out;
-    kept.for_each_field([&](const char*, auto& b) { out.push_back(&b); });
-    std::size_t k = 0;
-    all.for_each_field([&](const char*, auto& b) {
-      auto* o = static_cast<std::decay_t<decltype(b)>*>(out[k++]);
-      for (Index i = 0; i < all.n_wall; ++i)
-        if (all.body[std::size_t(i)] != solid) o->vec().push_back(b[std::size_t(i)]);
-    });
-    kept.n_wall = Index(kept.id.size());
+    std::vector<Index> slots;
+    for (Index i = 0; i < all.n_wall; ++i)
+      if (all.body[std::size_t(i)] != solid) slots.push_back(i);
+    ParticleSet<Host> kept = copy_slots(all, slots);
+    kept.n_wall = Index(slots.size());
     const Index removed = all.n_wall - kept.n_wall;
     append_walls(h, std::move(kept));
     append_grains(h, std::move(grains));
@@ -741,17 +756,94 @@ class Solver final : public SolverBase {
       mine[std::size_t(k)] = ex_->owns(p_.mdbc ? h.ghost[b + k] : h.pos[b + k]) ? 1 : 0;
     set_mine(std::move(mine));
     ex_->build_wall_plan(h.id.data() + b, mine_host_.data(), ps_.n_wall);
+    mark_grain_owners();  // grains: by the grain plan once it is built
   }
 
+  // Grain slots owned: those whose tag is a root of the grain halo plan.
   void mark_grain_owners() {
-    if (ps_.n_grain == 0) return;
-    const Index b = ps_.wall_begin(), nw = ps_.n_wall, n = nw + ps_.n_grain;
-    const ParticleSet<Host>& h = host_particles();
+    if (!grains_built_) return;
     std::vector<std::uint8_t> mine = mine_host_;
-    mine.resize(std::size_t(n));
-    for (Index k = nw; k < n; ++k)
-      mine[std::size_t(k)] = ex_->owns(p_.mdbc ? h.ghost[b + k] : h.pos[b + k]) ? 1 : 0;
+    mine.resize(std::size_t(ps_.n_wall + ps_.n_grain));
+    for (Index k = 0; k < ps_.n_grain; ++k)
+      mine[std::size_t(ps_.n_wall + k)] = grain_at_[std::size_t(k)] < n_grain_owned_ ? 1 : 0;
     set_mine(std::move(mine));
+  }
+
+  // Many ranks, at each neighbour rebuild: this rank's grain slots anew from the grain source.
+  // It keeps the particles whose ghost node (DBC: position) its box owns, and the grain halo plan
+  // brings copies of the other ranks' within the halo width. DBC particles carry their
+  // integrated density: an owner takes it from the slot of the same id it held before (every one
+  // did: a particle that moved into the box since the last rebuild was within the halo width of
+  // it, or the rebuild would have come sooner). The owned particles of all ranks must add up to
+  // every grain particle.
+  void rebuild_grains() {
+    if (!grain_source_) return;
+    auto t0 = tick();
+    Index owned = 0;
+    on_host([&](ParticleSet<Host>& h) {
+      ParticleSet<Host> old = take_grains(h);
+      std::unordered_map<GlobalId, Index> was;
+      for (Index i = 0; i < old.size(); ++i) was.emplace(old.id[std::size_t(i)], i);
+      Vec3 lo, hi;
+      ex_->owned_box(lo, hi);
+      ParticleSet<Host> cand = grain_source_(lo, hi);
+      std::vector<Index> keep;
+      for (Index i = 0; i < cand.size(); ++i)
+        if (ex_->owns(p_.mdbc ? cand.ghost[std::size_t(i)] : cand.pos[std::size_t(i)]))
+          keep.push_back(i);
+      ParticleSet<Host> g = copy_slots(cand, keep);
+      g.n_fluid = Index(keep.size());  // laid out as fluid for the halo plan
+      if (!p_.mdbc)
+        for (Index i = 0; i < g.size(); ++i) {
+          const auto at = was.find(g.id[std::size_t(i)]);
+          if (at == was.end())
+            throw RuntimeFault("grains across ranks: grain boundary particle " +
+                               std::to_string(g.id[std::size_t(i)]) + " came into rank " +
+                               std::to_string(ex_->rank()) +
+                               "'s box from beyond its halo between two rebuilds");
+          g.rho[std::size_t(i)] = old.rho[std::size_t(at->second)];
+          g.rho_prev[std::size_t(i)] = old.rho_prev[std::size_t(at->second)];
+          g.press[std::size_t(i)] = old.press[std::size_t(at->second)];
+        }
+      ex_->build_grain_halo(g);
+      owned = g.n_fluid;
+      g.n_grain = g.n_fluid + g.n_halo;
+      g.n_fluid = g.n_halo = 0;
+      append_grains(h, std::move(g));
+    });
+    const std::int64_t all = ex_->sum(std::int64_t(owned));
+    if (all != std::int64_t(grain_total_))
+      throw RuntimeFault("grains across ranks: the ranks own " + std::to_string(all) +
+                         " grain boundary particles, the grains have " +
+                         std::to_string(grain_total_) +
+                         " (a ghost node outside every box, or in two)");
+    n_grain_owned_ = owned;
+    grain_at_.resize(std::size_t(ps_.n_grain));
+    std::iota(grain_at_.begin(), grain_at_.end(), std::uint32_t(0));
+    grains_built_ = true;
+    sort_grains();
+    const ParticleSet<Host>& h = host_particles();
+    const Index gb = h.wall_begin() + h.n_wall;
+    grain_pos_at_build_.resize(std::size_t(h.n_grain));
+    grain_ghost_at_build_.resize(std::size_t(h.n_grain));
+    for (Index k = 0; k < h.n_grain; ++k) {
+      const std::size_t t = grain_at_[std::size_t(k)];
+      grain_pos_at_build_[t] = h.pos[std::size_t(gb + k)];
+      grain_ghost_at_build_[t] = h.ghost[std::size_t(gb + k)];
+    }
+    mark_grain_owners();
+    rate_.resize(std::size_t(ps_.size()));
+    clock_.add(times_.halo, t0, tick());
+  }
+
+  // A new host set holding the given slots of src (every field), with no counts set.
+  static ParticleSet<Host> copy_slots(ParticleSet<Host>& src, const std::vector<Index>& slots) {
+    ParticleSet<Host> out;
+    zip_fields(out, src, [&](auto& o, auto& b) {
+      o.vec().resize(slots.size());
+      for (std::size_t j = 0; j < slots.size(); ++j) o[j] = b[std::size_t(slots[j])];
+    });
+    return out;
   }
 
   void set_mine(std::vector<std::uint8_t> mine) {
@@ -763,16 +855,38 @@ class Solver final : public SolverBase {
     mine_host_ = std::move(mine);
   }
 
-  // Grain slots: every rank holds all of them in the same order (same poses, same sort), so a sum
-  // over ranks slot by slot adds the partial values (or the owner's value to zeros).
+  // Grain plan: reduce = add the copies' partial sums into the owners; otherwise copy the owners'
+  // values to the copies. The plan's roots and leaves are the tags of grain_at_.
   template <class T>
-  void grain_sum(Buffer<T, Space>& field) {
-    if (ps_.n_grain == 0) return;
-    static_assert(sizeof(T) % sizeof(Real) == 0, "grain_sum: a field of Reals");
+  void grain_sync(Buffer<T, Space>& field, bool reduce) {
+    if (!grain_source_) return;
     host_valid_ = false;
     std::vector<T> tmp;
     T* f = get_host<T>(field, tmp) + ps_.wall_begin() + ps_.n_wall;
-    ex_->sum(reinterpret_cast<Real*>(f), ps_.n_grain * Index(sizeof(T) / sizeof(Real)));
+    const Index ng = ps_.n_grain, no = n_grain_owned_;
+    std::vector<T> roots(std::size_t(std::max<Index>(no, 1)), T());
+    std::vector<T> leaves(std::size_t(std::max<Index>(ng - no, 1)), T());
+    for (Index k = 0; k < ng; ++k) {
+      const Index t = grain_at_[std::size_t(k)];
+      if (t < no) {
+        roots[std::size_t(t)] = f[k];
+      } else {
+        leaves[std::size_t(t - no)] = f[k];
+      }
+    }
+    if (reduce) {
+      ex_->grain_reduce(leaves.data(), roots.data());
+    } else {
+      ex_->grain_bcast(roots.data(), leaves.data());
+    }
+    for (Index k = 0; k < ng; ++k) {
+      const Index t = grain_at_[std::size_t(k)];
+      if (t < no) {
+        if (reduce) f[k] = roots[std::size_t(t)];
+      } else if (!reduce) {
+        f[k] = leaves[std::size_t(t - no)];
+      }
+    }
     put_host<T>(field, tmp);
   }
 
@@ -780,12 +894,8 @@ class Solver final : public SolverBase {
   static ParticleSet<Host> take_grains(ParticleSet<Host>& ps) {
     const Index gb = ps.wall_begin() + ps.n_wall, n = ps.size();
     ParticleSet<Host> g;
-    std::vector<void*> out;
-    g.for_each_field([&](const char*, auto& b) { out.push_back(&b); });
-    std::size_t k = 0;
-    ps.for_each_field([&](const char*, auto& b) {
-      auto* o = static_cast<std::decay_t<decltype(b)>*>(out[k++]);
-      o->vec().assign(b.vec().begin() + gb, b.vec().begin() + n);
+    zip_fields(g, ps, [&](auto& o, auto& b) {
+      o.vec().assign(b.vec().begin() + gb, b.vec().begin() + n);
       b.vec().resize(std::size_t(gb));
     });
     g.n_grain = n - gb;
@@ -808,7 +918,15 @@ class Solver final : public SolverBase {
   CellList<Space> fluid_cells_, boundary_cells_, halo_cells_, grain_cells_;
   Buffer<std::uint8_t, Space> wall_mine_;
   std::vector<std::uint32_t> root_at_, leaf_at_;  // current owned/halo slot -> plan root/leaf
-  std::vector<Vec3> pos_at_build_;                // owned positions at the last rebuild, by root
+  // Many ranks, grains: the source, all ranks' grain particle count, the owned ones; per grain
+  // slot its tag (< n_grain_owned_: a root of the grain plan, else leaf tag - n_grain_owned_);
+  // per tag the position and ghost node at the rebuild.
+  GrainSource grain_source_;
+  Index grain_total_ = 0, n_grain_owned_ = 0;
+  bool grains_built_ = false;
+  std::vector<std::uint32_t> grain_at_;
+  std::vector<Vec3> grain_pos_at_build_, grain_ghost_at_build_;
+  std::vector<Vec3> pos_at_build_;  // owned positions at the last rebuild, by root
   bool built_ = false;
   std::int64_t rebuilds_ = 0;
   std::vector<std::uint8_t> mine_host_;  // wall slots this rank owns (many ranks only)
