@@ -32,6 +32,10 @@ void release_cached_memory();
 void copy_to_device(void* dst, const void* src, std::size_t bytes);
 void copy_to_host(void* dst, const void* src, std::size_t bytes);
 void copy_device_to_device(void* dst, const void* src, std::size_t bytes);
+// Page-locked host memory (cudaMallocHost), for staging MPI traffic: Debian's Open MPI is not
+// CUDA-aware, so halo fields go device -> pinned host -> MPI -> pinned host -> device.
+void* pinned_alloc(std::size_t bytes);
+void pinned_free(void* p) noexcept;
 void synchronize();
 
 }  // namespace sphdem::cuda

@@ -60,4 +60,40 @@ class Buffer<T, Device> {
   std::size_t n_ = 0, cap_ = 0;
 };
 
+// HostStage (core/exec.hpp) for device buffers: a pinned host array, grown as needed and kept.
+template <class T>
+class HostStage<T, Device> {
+ public:
+  HostStage() = default;
+  HostStage(const HostStage&) = delete;
+  HostStage& operator=(const HostStage&) = delete;
+  ~HostStage() { cuda::pinned_free(p_); }
+
+  T* read(Buffer<T, Device>& b, Index n) {
+    reserve(n);
+    if (n > 0) cuda::copy_to_host(p_, b.data(), std::size_t(n) * sizeof(T));
+    return p_;
+  }
+  T* space(Buffer<T, Device>& b, Index n) {
+    b.resize(std::size_t(n > 0 ? n : 1));
+    reserve(n);
+    return p_;
+  }
+  void write(Buffer<T, Device>& b, Index n) {
+    if (n > 0) cuda::copy_to_device(b.data(), p_, std::size_t(n) * sizeof(T));
+  }
+
+ private:
+  void reserve(Index n) {
+    const std::size_t want = std::size_t(n > 0 ? n : 1);
+    if (want <= cap_) return;
+    cuda::pinned_free(p_);
+    p_ = nullptr;
+    p_ = static_cast<T*>(cuda::pinned_alloc(want * sizeof(T)));
+    cap_ = want;
+  }
+  T* p_ = nullptr;
+  std::size_t cap_ = 0;
+};
+
 }  // namespace sphdem

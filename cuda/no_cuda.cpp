@@ -37,6 +37,10 @@ void copy_device_to_device(void*, const void*, std::size_t) {
   unavailable();
 }
 void synchronize() {}
+void* pinned_alloc(std::size_t) {
+  unavailable();
+}
+void pinned_free(void*) noexcept {}
 
 }  // namespace sphdem::cuda
 

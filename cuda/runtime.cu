@@ -157,6 +157,15 @@ void copy_device_to_device(void* dst, const void* src, std::size_t bytes) {
 void synchronize() {
   check_cuda(cudaDeviceSynchronize(), "synchronize");
 }
+void* pinned_alloc(std::size_t bytes) {
+  if (bytes == 0) return nullptr;
+  void* p = nullptr;
+  check_cuda(cudaMallocHost(&p, bytes), "cudaMallocHost");
+  return p;
+}
+void pinned_free(void* p) noexcept {
+  if (p) cudaFreeHost(p);
+}
 }  // namespace cuda
 
 void sort_pairs_stable(Device, std::uint64_t* keys, std::uint32_t* values, Index n,

@@ -13,8 +13,9 @@
 // The graph is built with PetscCommBuildTwoSided (each source tells each target how many copies
 // it gets, then sends the slots and shifts) and PetscSFSetGraph. bcast() sends owned values to
 // the halo (PetscSFBcast, MPI_REPLACE); reduce_sum() adds per-halo contributions back into the
-// owners (PetscSFReduce, MPI_SUM), e.g. forces on grain particles. Host buffers only; the
-// device path packs on the GPU and stages through pinned host memory (not here yet).
+// owners (PetscSFReduce, MPI_SUM), e.g. forces on grain particles. Host buffers only: the solver
+// packs the values in its execution space and, on the device, stages them through pinned host
+// memory (HostStage in core/exec.hpp and cuda/device_buffer.hpp).
 #pragma once
 
 #include <mpi.h>

@@ -146,9 +146,29 @@ class Buffer<T, Host> {
   const T& operator[](std::size_t i) const { return v_[i]; }
   std::vector<T>& vec() { return v_; }
   const std::vector<T>& vec() const { return v_; }
+  void swap(Buffer& o) noexcept { v_.swap(o.v_); }
 
  private:
   std::vector<T> v_;
+};
+
+// Host memory that MPI reads and writes for the values of a Buffer<T, Space> (DESIGN.md §5: Open
+// MPI here is not CUDA-aware). On the host it is the buffer's own storage; the device version
+// (cuda/device_buffer.hpp) copies through a pinned host array it keeps between calls.
+template <class T, class Space>
+class HostStage;
+
+template <class T>
+class HostStage<T, Host> {
+ public:
+  // The first n values of b, readable on the host.
+  T* read(Buffer<T, Host>& b, Index) { return b.data(); }
+  // Host memory for n values that write() then puts into b (sized at least 1).
+  T* space(Buffer<T, Host>& b, Index n) {
+    b.resize(std::size_t(n > 0 ? n : 1));
+    return b.data();
+  }
+  void write(Buffer<T, Host>&, Index) {}
 };
 
 // ---------------------------------------------------------------------------------------------

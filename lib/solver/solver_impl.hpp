@@ -28,6 +28,16 @@ inline void to_space(Host, ParticleSet<Host>&& src, ParticleSet<Host>& dst) {
 }
 inline void to_host(Host, ParticleSet<Host>&, ParticleSet<Host>&) {}
 
+// Whether x lies outside the domain along a non-periodic axis (y does not count in 2D); NaN is
+// outside.
+SPHDEM_HD inline bool outside_domain(const StepParams& p, const Vec3& x) {
+  for (int k = 0; k < 3; ++k) {
+    if (p.grid.periodic[k] || (p.dim == 2 && k == 1)) continue;
+    if (!(x[k] >= p.domain_lo[k] && x[k] <= p.domain_hi[k])) return true;
+  }
+  return false;
+}
+
 template <class Space>
 class Solver final : public SolverBase {
  public:
@@ -385,15 +395,7 @@ class Solver final : public SolverBase {
           v.pos[i] = x;
         });
     const Index out = reduce<SumOp, Index>(
-        Space{}, nf, SPHDEM_LAMBDA(Index i) {
-          const Vec3 x = v.pos[i];
-          bool outside = false;
-          for (int k = 0; k < 3; ++k) {
-            if (p.grid.periodic[k] || (p.dim == 2 && k == 1)) continue;
-            if (x[k] < p.domain_lo[k] || x[k] > p.domain_hi[k] || x[k] != x[k]) outside = true;
-          }
-          return Index(outside ? 1 : 0);
-        });
+        Space{}, nf, SPHDEM_LAMBDA(Index i) { return Index(outside_domain(p, v.pos[i]) ? 1 : 0); });
     const Index out_all = ex_ ? Index(ex_->sum(std::int64_t(out))) : out;
     if (out_all == 0) return 0;
     Real mass_out = 0;
@@ -406,12 +408,10 @@ class Solver final : public SolverBase {
       }
       std::vector<char> keep(std::size_t(h.size()), 1);
       for (Index i = 0; i < h.n_fluid; ++i) {
-        const Vec3 x = h.pos[i];
-        for (int k = 0; k < 3; ++k) {
-          if (p.grid.periodic[k] || (p.dim == 2 && k == 1)) continue;
-          if (!(x[k] >= p.domain_lo[k] && x[k] <= p.domain_hi[k])) keep[std::size_t(i)] = 0;
+        if (outside_domain(p, h.pos[i])) {
+          keep[std::size_t(i)] = 0;
+          mass_out += h.mass[i];
         }
-        if (!keep[std::size_t(i)]) mass_out += h.mass[i];
       }
       Index w = 0;
       const Index n = h.size();
@@ -528,24 +528,45 @@ class Solver final : public SolverBase {
   }
 
   // Sends the owned values of a field to the halo slots. The plan's roots and leaves are in the
-  // order of the last rebuild; root_at_ and leaf_at_ map the current slots to them.
+  // order of the last rebuild; root_at_ and leaf_at_ map the current slots to them. Packing and
+  // unpacking run in the execution space; on the device only the packed values travel, through
+  // pinned host memory (HostStage).
   template <class T>
   void refresh_halo(Buffer<T, Space>& field, bool positions = false,
                     HaloField kind = HaloField::kValue) {
     if (!ex_) return;  // collective: every rank calls it, with or without halo slots
     host_valid_ = false;
     const Index nf = ps_.n_fluid, nh = ps_.n_halo;
-    std::vector<T> tmp;
-    T* f = get_host<T>(field, tmp);
-    std::vector<T> roots(static_cast<std::size_t>(std::max<Index>(nf, 1)));
-    for (Index i = 0; i < nf; ++i) roots[root_at_[std::size_t(i)]] = f[i];
-    std::vector<T> leaves(static_cast<std::size_t>(std::max<Index>(nh, 1)));
-    bcast_one(roots.data(), leaves.data(), positions, kind);
-    for (Index j = 0; j < nh; ++j) f[nf + j] = leaves[leaf_at_[std::size_t(j)]];
-    put_host<T>(field, tmp);
+    HaloScratch<T>& sc = scratch<T>();
+    sc.send.resize(std::size_t(std::max<Index>(nf, 1)));
+    T* f = field.data();
+    T* send = sc.send.data();
+    const std::uint32_t* ra = root_at_.data();
+    for_each(
+        Space{}, nf, SPHDEM_LAMBDA(Index i) { send[ra[i]] = f[i]; });
+    T* roots = sc.send_host.read(sc.send, nf);
+    T* leaves = sc.recv_host.space(sc.recv, nh);
+    bcast_one(roots, leaves, positions, kind);
+    sc.recv_host.write(sc.recv, nh);
+    const T* recv = sc.recv.data();
+    const std::uint32_t* la = leaf_at_.data();
+    for_each(
+        Space{}, nh, SPHDEM_LAMBDA(Index j) { f[nf + j] = recv[la[j]]; });
   }
 
   // After a sort of the range a cell list covers: slot i now holds what slot order[i] held.
+  void follow(Buffer<std::uint32_t, Space>& at, CellList<Space>& cl) {
+    const Index n = Index(at.size());
+    if (n == 0) return;
+    follow_scratch_.resize(at.size());
+    const std::uint32_t* order = cl.order.data();
+    const std::uint32_t* a = at.data();
+    std::uint32_t* next = follow_scratch_.data();
+    for_each(
+        Space{}, n, SPHDEM_LAMBDA(Index i) { next[i] = a[order[i]]; });
+    at.swap(follow_scratch_);
+  }
+  // The same for the grain tags, kept on the host.
   void follow(std::vector<std::uint32_t>& at, CellList<Space>& cl) {
     std::vector<std::uint32_t> otmp;
     const std::uint32_t* order = cl.count > 0 ? get_host<std::uint32_t>(cl.order, otmp) : nullptr;
@@ -559,13 +580,20 @@ class Solver final : public SolverBase {
   void record_build() {
     const Index nf = ps_.n_fluid, nh = ps_.n_halo;
     root_at_.resize(std::size_t(nf));
-    std::iota(root_at_.begin(), root_at_.end(), std::uint32_t(0));
     leaf_at_.resize(std::size_t(nh));
-    std::iota(leaf_at_.begin(), leaf_at_.end(), std::uint32_t(0));
+    pos_at_build_.resize(std::size_t(nf));
+    std::uint32_t* ra = root_at_.data();
+    std::uint32_t* la = leaf_at_.data();
+    Vec3* pb = pos_at_build_.data();
+    const Vec3* pos = ps_.pos.data();
+    for_each(
+        Space{}, nf, SPHDEM_LAMBDA(Index i) {
+          ra[i] = std::uint32_t(i);
+          pb[i] = pos[i];
+        });
+    for_each(
+        Space{}, nh, SPHDEM_LAMBDA(Index j) { la[j] = std::uint32_t(j); });
     follow(leaf_at_, halo_cells_);
-    std::vector<Vec3> tmp;
-    const Vec3* pos = get_host<Vec3>(ps_.pos, tmp);
-    pos_at_build_.assign(pos, pos + nf);
     built_ = true;
   }
 
@@ -576,20 +604,22 @@ class Solver final : public SolverBase {
     const int every = scene_.parallel.rebalance_every;
     int local = !built_ || (every > 0 && step_ > 0 && step_ % every == 0) ? 1 : 0;
     const Index nf = ps_.n_fluid;
-    std::vector<Vec3> tmp;
-    const Vec3* pos = get_host<Vec3>(ps_.pos, tmp);
     Real drift2 = 0;
-    for (Index i = 0; i < nf && !local; ++i) {
-      const Vec3 x = pos[i];
-      drift2 = std::max(drift2, norm2(x - pos_at_build_[root_at_[std::size_t(i)]]));
-      for (int k = 0; k < 3; ++k) {
-        if (p_.grid.periodic[k] || (p_.dim == 2 && k == 1)) continue;
-        if (!(x[k] >= p_.domain_lo[k] && x[k] <= p_.domain_hi[k])) local = 1;
-      }
+    if (!local && nf > 0) {  // in the execution space: no positions leave the device
+      const Vec3* pos = ps_.pos.data();
+      const Vec3* pb = pos_at_build_.data();
+      const std::uint32_t* ra = root_at_.data();
+      const StepParams p = p_;
+      drift2 = reduce<MaxOp, Real>(
+          Space{}, nf, SPHDEM_LAMBDA(Index i) { return norm2(pos[i] - pb[ra[i]]); });
+      const Index out = reduce<SumOp, Index>(
+          Space{}, nf, SPHDEM_LAMBDA(Index i) { return Index(outside_domain(p, pos[i]) ? 1 : 0); });
+      if (out > 0) local = 1;
     }
     if (grain_source_ && !grains_built_) local = 1;
-    if (grains_built_ && !local) {  // grain particles and their ghost nodes (rotation moves them
-      std::vector<Vec3> gtmp;       // further than the particles)
+    if (grains_built_ && !local) {   // grain particles and their ghost nodes (rotation moves them
+      std::vector<Vec3> ptmp, gtmp;  // further than the particles)
+      const Vec3* pos = get_host<Vec3>(ps_.pos, ptmp);
       const Vec3* ghost = get_host<Vec3>(ps_.ghost, gtmp);
       const Index gb = ps_.wall_begin() + ps_.n_wall;
       for (Index k = 0; k < ps_.n_grain; ++k) {
@@ -917,7 +947,26 @@ class Solver final : public SolverBase {
   std::shared_ptr<Exchange> ex_;
   CellList<Space> fluid_cells_, boundary_cells_, halo_cells_, grain_cells_;
   Buffer<std::uint8_t, Space> wall_mine_;
-  std::vector<std::uint32_t> root_at_, leaf_at_;  // current owned/halo slot -> plan root/leaf
+  Buffer<std::uint32_t, Space> root_at_, leaf_at_;  // current owned/halo slot -> plan root/leaf
+  Buffer<std::uint32_t, Space> follow_scratch_;
+  Buffer<Vec3, Space> pos_at_build_;  // owned positions at the last rebuild, by root
+  // Packed halo values in the execution space and their host stages, per field type.
+  template <class T>
+  struct HaloScratch {
+    Buffer<T, Space> send, recv;
+    HostStage<T, Space> send_host, recv_host;
+  };
+  HaloScratch<Real> scratch_real_;
+  HaloScratch<Vec3> scratch_vec3_;
+  template <class T>
+  HaloScratch<T>& scratch() {
+    static_assert(std::is_same_v<T, Real> || std::is_same_v<T, Vec3>, "halo fields: Real, Vec3");
+    if constexpr (std::is_same_v<T, Real>) {
+      return scratch_real_;
+    } else {
+      return scratch_vec3_;
+    }
+  }
   // Many ranks, grains: the source, all ranks' grain particle count, the owned ones; per grain
   // slot its tag (< n_grain_owned_: a root of the grain plan, else leaf tag - n_grain_owned_);
   // per tag the position and ghost node at the rebuild.
@@ -926,7 +975,6 @@ class Solver final : public SolverBase {
   bool grains_built_ = false;
   std::vector<std::uint32_t> grain_at_;
   std::vector<Vec3> grain_pos_at_build_, grain_ghost_at_build_;
-  std::vector<Vec3> pos_at_build_;  // owned positions at the last rebuild, by root
   bool built_ = false;
   std::int64_t rebuilds_ = 0;
   std::vector<std::uint8_t> mine_host_;  // wall slots this rank owns (many ranks only)
