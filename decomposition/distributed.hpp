@@ -52,10 +52,14 @@ class MpiExchange final : public Exchange {
     walls_.reset();
     walls_.emplace(dd_.comm(), id, mine, n);
   }
-  void wall_bcast(Real* f) override { walls_->bcast(f); }
-  void wall_bcast(Vec3* f) override { walls_->bcast(f); }
-  void wall_reduce(Real* f) override { walls_->reduce_sum(f); }
-  void wall_reduce(Vec3* f) override { walls_->reduce_sum(f); }
+  void wall_slots(std::vector<Index>& roots, std::vector<Index>& leaves) const override {
+    roots = walls_->root_slots();
+    leaves = walls_->leaf_slots();
+  }
+  void wall_bcast(const Real* roots, Real* leaves) override { walls_->bcast(roots, leaves); }
+  void wall_bcast(const Vec3* roots, Vec3* leaves) override { walls_->bcast(roots, leaves); }
+  void wall_reduce(const Real* leaves, Real* roots) override { walls_->reduce_sum(leaves, roots); }
+  void wall_reduce(const Vec3* leaves, Vec3* roots) override { walls_->reduce_sum(leaves, roots); }
   void owned_box(Vec3& lo, Vec3& hi) const override;
   void build_grain_halo(ParticleSet<Host>& g) override;
   void grain_bcast(const Real* owned, Real* halo) override { grains_->bcast(owned, halo); }

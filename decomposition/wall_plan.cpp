@@ -2,7 +2,6 @@
 
 #include <petscsf.h>
 
-#include <cstring>
 #include <string>
 #include <type_traits>
 #include <unordered_map>
@@ -19,18 +18,19 @@ MPI_Datatype real_type() {
 }
 }  // namespace
 
-WallPlan::WallPlan(MPI_Comm comm, const GlobalId* id, const std::uint8_t* mine, Index n) : n_(n) {
+WallPlan::WallPlan(MPI_Comm comm, const GlobalId* id, const std::uint8_t* mine, Index n) {
   MPI_Type_contiguous(3, real_type(), &vec3_);
   MPI_Type_commit(&vec3_);
   int size = 1, me = 0;
   MPI_Comm_size(comm, &size);
   MPI_Comm_rank(comm, &me);
-  // Every owner's (id, slot) pairs to every rank.
+  // Every owner's (id, root) pairs to every rank; root k is this rank's k-th owned slot.
   std::vector<long long> pairs;
   for (Index s = 0; s < n; ++s)
     if (mine[s]) {
       pairs.push_back((long long)id[s]);
-      pairs.push_back((long long)s);
+      pairs.push_back((long long)root_slots_.size());
+      root_slots_.push_back(s);
     }
   std::vector<int> counts(static_cast<std::size_t>(size)), displs(static_cast<std::size_t>(size));
   int mycount = int(pairs.size());
@@ -48,9 +48,8 @@ WallPlan::WallPlan(MPI_Comm comm, const GlobalId* id, const std::uint8_t* mine, 
   std::unordered_map<GlobalId, Index> want;
   for (Index s = 0; s < n; ++s)
     if (!mine[s]) want.emplace(id[s], s);
-  std::vector<PetscInt> ilocal;
   std::vector<PetscSFNode> remote;
-  ilocal.reserve(want.size());
+  leaf_slots_.reserve(want.size());
   remote.reserve(want.size());
   for (int r = 0; r < size; ++r) {
     if (r == me) continue;
@@ -58,7 +57,7 @@ WallPlan::WallPlan(MPI_Comm comm, const GlobalId* id, const std::uint8_t* mine, 
     for (int k = 0; k < counts[std::size_t(r)]; k += 2) {
       const auto it = want.find(GlobalId(p[k]));
       if (it == want.end()) continue;
-      ilocal.push_back(PetscInt(it->second));
+      leaf_slots_.push_back(it->second);
       PetscSFNode node;
       node.rank = r;
       node.index = PetscInt(p[k + 1]);
@@ -72,12 +71,12 @@ WallPlan::WallPlan(MPI_Comm comm, const GlobalId* id, const std::uint8_t* mine, 
     throw RuntimeFault("WallPlan: " + std::to_string(any) +
                        " wall particles kept on some rank have no owner (no rank's box holds "
                        "their ghost node)");
-  n_copies_ = Index(ilocal.size());
   PetscSF sf = nullptr;
   SPHDEM_PETSC(PetscSFCreate(comm, &sf));
   sf_ = sf;
-  SPHDEM_PETSC(PetscSFSetGraph(sf, PetscInt(n), PetscInt(ilocal.size()), ilocal.data(),
-                               PETSC_COPY_VALUES, remote.data(), PETSC_COPY_VALUES));
+  // Leaves are contiguous (ilocal NULL): leaf j is this rank's copy slot leaf_slots_[j].
+  SPHDEM_PETSC(PetscSFSetGraph(sf, PetscInt(root_slots_.size()), PetscInt(leaf_slots_.size()),
+                               nullptr, PETSC_COPY_VALUES, remote.data(), PETSC_COPY_VALUES));
   SPHDEM_PETSC(PetscSFSetUp(sf));
 }
 
@@ -106,39 +105,36 @@ WallPlan& WallPlan::operator=(WallPlan&& o) noexcept {
   release();
   sf_ = std::exchange(o.sf_, nullptr);
   vec3_ = std::exchange(o.vec3_, MPI_DATATYPE_NULL);
-  n_ = o.n_;
-  n_copies_ = o.n_copies_;
+  root_slots_ = std::move(o.root_slots_);
+  leaf_slots_ = std::move(o.leaf_slots_);
   return *this;
 }
 
-// Roots and leaves are slots of the same array (owners' slots and copies' slots, disjoint); the
-// source side goes through a copy so PETSc never reads what it writes.
-void WallPlan::run(MPI_Datatype unit, std::size_t bytes, void* f, bool reduce) const {
+void WallPlan::run(MPI_Datatype unit, const void* from, void* to, bool reduce) const {
   if (!sf_) return;
-  static char dummy[64];
-  std::vector<char> src(std::max<std::size_t>(std::size_t(n_) * bytes, 1));
-  if (n_ > 0) std::memcpy(src.data(), f, std::size_t(n_) * bytes);
-  void* dst = n_ > 0 ? f : dummy;
+  static char dummy[64];  // PETSc wants a pointer even for no values
+  const void* src = from ? from : dummy;
+  void* dst = to ? to : dummy;
   if (reduce) {
-    SPHDEM_PETSC(PetscSFReduceBegin(sf_, unit, src.data(), dst, MPI_SUM));
-    SPHDEM_PETSC(PetscSFReduceEnd(sf_, unit, src.data(), dst, MPI_SUM));
+    SPHDEM_PETSC(PetscSFReduceBegin(sf_, unit, src, dst, MPI_SUM));
+    SPHDEM_PETSC(PetscSFReduceEnd(sf_, unit, src, dst, MPI_SUM));
   } else {
-    SPHDEM_PETSC(PetscSFBcastBegin(sf_, unit, src.data(), dst, MPI_REPLACE));
-    SPHDEM_PETSC(PetscSFBcastEnd(sf_, unit, src.data(), dst, MPI_REPLACE));
+    SPHDEM_PETSC(PetscSFBcastBegin(sf_, unit, src, dst, MPI_REPLACE));
+    SPHDEM_PETSC(PetscSFBcastEnd(sf_, unit, src, dst, MPI_REPLACE));
   }
 }
 
-void WallPlan::bcast(Real* f) const {
-  run(real_type(), sizeof(Real), f, false);
+void WallPlan::bcast(const Real* roots, Real* leaves) const {
+  run(real_type(), roots, leaves, false);
 }
-void WallPlan::bcast(Vec3* f) const {
-  run(vec3_, sizeof(Vec3), f, false);
+void WallPlan::bcast(const Vec3* roots, Vec3* leaves) const {
+  run(vec3_, roots, leaves, false);
 }
-void WallPlan::reduce_sum(Real* f) const {
-  run(real_type(), sizeof(Real), f, true);
+void WallPlan::reduce_sum(const Real* leaves, Real* roots) const {
+  run(real_type(), leaves, roots, true);
 }
-void WallPlan::reduce_sum(Vec3* f) const {
-  run(vec3_, sizeof(Vec3), f, true);
+void WallPlan::reduce_sum(const Vec3* leaves, Vec3* roots) const {
+  run(vec3_, leaves, roots, true);
 }
 
 }  // namespace sphdem

@@ -4,10 +4,12 @@
 // (fluid it owns sees them) and those whose mDBC ghost node lies in its box (it computes their
 // state). A wall's state (mDBC density and velocity, DBC density rate, fluid force) is computed by
 // exactly one rank, its "owner": the rank whose box holds the ghost node (mDBC) or the particle
-// (DBC). The plan is a PetscSF from each owner's slot to every other rank's copy: bcast() copies
-// owner values to the copies, reduce_sum() adds the copies' partial sums into the owner. Copies
-// and owners are matched by global id once, when the plan is built (an all-gather of the owners'
-// (id, slot) pairs), so the slots may be in any order on each rank.
+// (DBC). The plan is a PetscSF over packed values: its roots are this rank's owned slots in slot
+// order (root_slots()), its leaves this rank's copies (leaf_slots()), each fed by its owner's
+// root. bcast() copies owner values to the copies, reduce_sum() adds the copies' partial sums into
+// the owners; the caller packs and unpacks (in its execution space, so only packed values travel).
+// Copies and owners are matched by global id once, when the plan is built (an all-gather of the
+// owners' ids), so the slots may be in any order on each rank.
 #pragma once
 
 #include <mpi.h>
@@ -33,20 +35,22 @@ class WallPlan {
   WallPlan(const WallPlan&) = delete;
   WallPlan& operator=(const WallPlan&) = delete;
 
-  Index n_copies() const { return n_copies_; }  // this rank's slots owned elsewhere
+  Index n_copies() const { return Index(leaf_slots_.size()); }  // slots owned elsewhere
+  const std::vector<Index>& root_slots() const { return root_slots_; }
+  const std::vector<Index>& leaf_slots() const { return leaf_slots_; }
 
-  // f: n values (this rank's wall slots). Collective.
-  void bcast(Real* f) const;
-  void bcast(Vec3* f) const;
-  void reduce_sum(Real* f) const;
-  void reduce_sum(Vec3* f) const;
+  // roots: root_slots().size() values; leaves: leaf_slots().size(). Collective.
+  void bcast(const Real* roots, Real* leaves) const;
+  void bcast(const Vec3* roots, Vec3* leaves) const;
+  void reduce_sum(const Real* leaves, Real* roots) const;
+  void reduce_sum(const Vec3* leaves, Vec3* roots) const;
 
  private:
-  void run(MPI_Datatype unit, std::size_t bytes, void* f, bool reduce) const;
+  void run(MPI_Datatype unit, const void* from, void* to, bool reduce) const;
   void release();
   _p_PetscSF* sf_ = nullptr;
   MPI_Datatype vec3_ = MPI_DATATYPE_NULL;
-  Index n_ = 0, n_copies_ = 0;
+  std::vector<Index> root_slots_, leaf_slots_;
 };
 
 }  // namespace sphdem

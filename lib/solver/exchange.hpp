@@ -53,11 +53,14 @@ class Exchange {
                                                bool by_ghost) const = 0;
   // The plan between wall owners and copies (mine: 1 where this rank owns the slot).
   virtual void build_wall_plan(const GlobalId* id, const std::uint8_t* mine, Index n) = 0;
-  // Owner values to the copies; the copies' partial sums added into the owner.
-  virtual void wall_bcast(Real* f) = 0;
-  virtual void wall_bcast(Vec3* f) = 0;
-  virtual void wall_reduce(Real* f) = 0;
-  virtual void wall_reduce(Vec3* f) = 0;
+  // The plan's roots (this rank's owned wall slots, in slot order) and leaves (its copies), as
+  // offsets from the first wall slot. The values travel packed in that order.
+  virtual void wall_slots(std::vector<Index>& roots, std::vector<Index>& leaves) const = 0;
+  // Owner values to the copies; the copies' partial sums added into the owners.
+  virtual void wall_bcast(const Real* roots, Real* leaves) = 0;
+  virtual void wall_bcast(const Vec3* roots, Vec3* leaves) = 0;
+  virtual void wall_reduce(const Real* leaves, Real* roots) = 0;
+  virtual void wall_reduce(const Vec3* leaves, Vec3* roots) = 0;
   // Grain boundary particles (DESIGN.md §5, "Grains"): each rank holds those whose ghost node
   // (DBC: position) its box owns, plus copies of other ranks' within the halo width. Only an
   // exchange over many ranks implements these; one that owns every point (a symmetry plane's

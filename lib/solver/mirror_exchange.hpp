@@ -53,10 +53,14 @@ class MirrorExchange final : public Exchange {
   std::vector<std::uint8_t> keep_walls(const Vec3* pos, const Vec3* ghost, Index n,
                                        bool by_ghost) const override;
   void build_wall_plan(const GlobalId*, const std::uint8_t*, Index) override {}
-  void wall_bcast(Real*) override {}
-  void wall_bcast(Vec3*) override {}
-  void wall_reduce(Real*) override {}
-  void wall_reduce(Vec3*) override {}
+  void wall_slots(std::vector<Index>& roots, std::vector<Index>& leaves) const override {
+    roots.clear();
+    leaves.clear();
+  }
+  void wall_bcast(const Real*, Real*) override {}
+  void wall_bcast(const Vec3*, Vec3*) override {}
+  void wall_reduce(const Real*, Real*) override {}
+  void wall_reduce(const Vec3*, Vec3*) override {}
   void sum(Real*, Index) override {}
   void max(Real*, Index) override {}
   std::int64_t sum(std::int64_t v) override { return v; }

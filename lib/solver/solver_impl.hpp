@@ -644,18 +644,49 @@ class Solver final : public SolverBase {
   }
 
   // Wall plan: reduce = add the copies' partial sums into the owners; otherwise copy the owners'
-  // values to the copies.
+  // values to the copies. Packed and unpacked in the execution space (wall_roots_, wall_leaves_:
+  // the plan's slots); on the device only the packed values are staged through pinned memory.
   template <class T>
   void wall_sync(Buffer<T, Space>& field, bool reduce) {
     host_valid_ = false;
-    std::vector<T> tmp;
-    T* f = get_host<T>(field, tmp) + ps_.wall_begin();
+    const Index nr = Index(wall_roots_.size()), nl = Index(wall_leaves_.size());
+    HaloScratch<T>& sc = scratch<T>();
+    sc.send.resize(std::size_t(std::max<Index>(nr, 1)));
+    sc.recv.resize(std::size_t(std::max<Index>(nl, 1)));
+    T* f = field.data() + ps_.wall_begin();
+    T* rb = sc.send.data();
+    T* lb = sc.recv.data();
+    const std::uint32_t* wr = wall_roots_.data();
+    const std::uint32_t* wl = wall_leaves_.data();
+    for_each(
+        Space{}, nr, SPHDEM_LAMBDA(Index k) { rb[k] = f[wr[k]]; });
     if (reduce) {
-      ex_->wall_reduce(f);
+      for_each(
+          Space{}, nl, SPHDEM_LAMBDA(Index j) { lb[j] = f[wl[j]]; });
+      const T* leaves = sc.recv_host.read(sc.recv, nl);
+      T* roots = sc.send_host.read(sc.send, nr);
+      ex_->wall_reduce(leaves, roots);
+      sc.send_host.write(sc.send, nr);
+      for_each(
+          Space{}, nr, SPHDEM_LAMBDA(Index k) { f[wr[k]] = rb[k]; });
     } else {
-      ex_->wall_bcast(f);
+      const T* roots = sc.send_host.read(sc.send, nr);
+      T* leaves = sc.recv_host.space(sc.recv, nl);
+      ex_->wall_bcast(roots, leaves);
+      sc.recv_host.write(sc.recv, nl);
+      for_each(
+          Space{}, nl, SPHDEM_LAMBDA(Index j) { f[wl[j]] = lb[j]; });
     }
-    put_host<T>(field, tmp);
+  }
+
+  // A host vector into a buffer of the execution space.
+  template <class T>
+  static void put_space(Buffer<T, Space>& b, const std::vector<T>& v) {
+    if constexpr (std::is_same_v<Space, Host>) {
+      b.vec() = v;
+    } else {
+      b.upload(v);
+    }
   }
 
   // Moves the wall slots of a host set out into a set of their own, sorted by global id.
@@ -786,6 +817,10 @@ class Solver final : public SolverBase {
       mine[std::size_t(k)] = ex_->owns(p_.mdbc ? h.ghost[b + k] : h.pos[b + k]) ? 1 : 0;
     set_mine(std::move(mine));
     ex_->build_wall_plan(h.id.data() + b, mine_host_.data(), ps_.n_wall);
+    std::vector<Index> roots, leaves;
+    ex_->wall_slots(roots, leaves);
+    put_space(wall_roots_, std::vector<std::uint32_t>(roots.begin(), roots.end()));
+    put_space(wall_leaves_, std::vector<std::uint32_t>(leaves.begin(), leaves.end()));
     mark_grain_owners();  // grains: by the grain plan once it is built
   }
 
@@ -877,11 +912,7 @@ class Solver final : public SolverBase {
   }
 
   void set_mine(std::vector<std::uint8_t> mine) {
-    if constexpr (std::is_same_v<Space, Host>) {
-      wall_mine_.vec() = mine;
-    } else {
-      wall_mine_.upload(mine);
-    }
+    put_space(wall_mine_, mine);
     mine_host_ = std::move(mine);
   }
 
@@ -949,6 +980,7 @@ class Solver final : public SolverBase {
   Buffer<std::uint8_t, Space> wall_mine_;
   Buffer<std::uint32_t, Space> root_at_, leaf_at_;  // current owned/halo slot -> plan root/leaf
   Buffer<std::uint32_t, Space> follow_scratch_;
+  Buffer<std::uint32_t, Space> wall_roots_, wall_leaves_;  // the wall plan's slots (from wall 0)
   Buffer<Vec3, Space> pos_at_build_;  // owned positions at the last rebuild, by root
   // Packed halo values in the execution space and their host stages, per field type.
   template <class T>
