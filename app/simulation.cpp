@@ -664,19 +664,18 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
           });
       });
       if (coupling)  // the grain boundary particles take the grains' poses at t^n
-        timed(lt.coupling, [&] {
-          solver->move_grains(
-              [&](ParticleSet<Host>& ps) { coupling->place(ps, *dem.system, !ex); });
-        });
+        timed(lt.coupling, [&] { solver->pose_grains(coupling->table(), dem.system->bodies()); });
       const StepStats st = solver->step();
       if (coupling) {
         // The fluid's force on each grain at t^n drives the DEM from t^n to t^n + dt, in
         // sub-steps no longer than the DEM step (contacts between grains and with walls).
         dem::DemSystem& sys = *dem.system;
         timed(lt.coupling, [&] {
-          if (ex) {  // this rank's owned grain slots, then one sum over ranks (DESIGN.md §5)
-            const std::vector<std::uint8_t> mine = solver->wall_mine();
-            coupling->loads(solver->host_particles(), sys, grain_force, grain_torque, mine.data());
+          // Many ranks: this rank's owned grain slots, then one sum over ranks (DESIGN.md §5).
+          const std::vector<std::uint8_t> mine = solver->grain_mine();
+          coupling->loads(solver->grain_particles(), sys, grain_force, grain_torque,
+                          ex ? mine.data() : nullptr);
+          if (ex) {
             std::vector<Real> ft(6 * grain_force.size());
             for (std::size_t i = 0; i < grain_force.size(); ++i)
               for (int a = 0; a < 3; ++a) {
@@ -689,8 +688,6 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
                 grain_force[i][a] = ft[6 * i + std::size_t(a)];
                 grain_torque[i][a] = ft[6 * i + 3 + std::size_t(a)];
               }
-          } else {
-            coupling->loads(solver->host_particles(), sys, grain_force, grain_torque);
           }
           for (std::size_t i = 0; i < gradient_force.size(); ++i)
             grain_force[i] += gradient_force[i];

@@ -54,6 +54,10 @@ class Buffer<T, Device> {
     h.resize(n_);
     if (n_ > 0) cuda::copy_to_host(h.data(), p_, n_ * sizeof(T));
   }
+  // n values from slot b into host memory.
+  void download_range(T* out, std::size_t b, std::size_t n) const {
+    if (n > 0) cuda::copy_to_host(out, p_ + b, n * sizeof(T));
+  }
 
  private:
   T* p_ = nullptr;

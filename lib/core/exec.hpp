@@ -147,6 +147,10 @@ class Buffer<T, Host> {
   std::vector<T>& vec() { return v_; }
   const std::vector<T>& vec() const { return v_; }
   void swap(Buffer& o) noexcept { v_.swap(o.v_); }
+  // n values from slot b into host memory (as Buffer<T, Device>::download_range).
+  void download_range(T* out, std::size_t b, std::size_t n) const {
+    std::copy(v_.begin() + std::ptrdiff_t(b), v_.begin() + std::ptrdiff_t(b + n), out);
+  }
 
  private:
   std::vector<T> v_;

@@ -50,6 +50,14 @@ GrainCoupling::GrainCoupling(const dem::DemSystem& sys, Real dp, Real depth, Rea
   first_point_.push_back(0);
   for (const dem::RigidBody& b : sys.bodies())
     first_point_.push_back(first_point_.back() + Index(shapes_[std::size_t(b.shape)].pos.size()));
+  for (const GrainBoundaryShape& s : shapes_) {
+    table_.template_first.push_back(std::uint32_t(table_.pos.size()));
+    table_.pos.insert(table_.pos.end(), s.pos.begin(), s.pos.end());
+    table_.ghost.insert(table_.ghost.end(), s.ghost.begin(), s.ghost.end());
+    table_.normal.insert(table_.normal.end(), s.normal.begin(), s.normal.end());
+  }
+  for (std::size_t g = 0; g + 1 < first_point_.size(); ++g)
+    table_.grain_first.push_back(std::uint32_t(first_point_[g]));
 }
 
 void GrainCoupling::locate(std::size_t k, std::size_t& grain, std::size_t& point) const {
@@ -61,12 +69,9 @@ void GrainCoupling::locate(std::size_t k, std::size_t& grain, std::size_t& point
 void GrainCoupling::pose(ParticleSet<Host>& ps, std::size_t i, const dem::RigidBody& body,
                          std::size_t p) const {
   const GrainBoundaryShape& s = shapes_[std::size_t(body.shape)];
-  const Vec3 x = body.x + rotate(body.q, s.pos[p]);
-  ps.pos[i] = x;
-  ps.ghost[i] = body.x + rotate(body.q, s.ghost[p]);
+  pose_grain_point(body, s.pos[p], s.ghost[p], s.normal[p], ps.pos[i], ps.ghost[i], ps.normal[i],
+                   ps.vel[i]);
   ps.ghost_alt[i] = ps.ghost[i];
-  ps.normal[i] = rotate(body.q, s.normal[p]);
-  ps.vel[i] = dem::point_velocity(body, x);
 }
 
 Index GrainCoupling::append(ParticleSet<Host>& ps, const dem::DemSystem& sys) {
@@ -88,6 +93,7 @@ Index GrainCoupling::append(ParticleSet<Host>& ps, const dem::DemSystem& sys) {
   GlobalId max_id = 0;
   for (Index i = 0; i < ps.size(); ++i) max_id = std::max(max_id, ps.id[std::size_t(i)]);
   first_id_ = max_id + 1;
+  table_.first_id = first_id_;
   // Compact in place (fluid first, so every later slot moves down by the fluid removed).
   const Index n_old = ps.size() - removed;
   ps.for_each_field([&](const char*, auto& f) {

@@ -18,6 +18,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "coupling/grain_pose.hpp"
 #include "dem/dem_system.hpp"
 #include "solver/particles.hpp"
 
@@ -54,7 +55,12 @@ class GrainCoupling {
   // Per template: the boundary point count (reporting).
   const std::vector<GrainBoundaryShape>& shapes() const { return shapes_; }
   // Restart: the first grain particle id of a set written by append().
-  void set_first_id(GlobalId id) { first_id_ = id; }
+  void set_first_id(GlobalId id) {
+    first_id_ = id;
+    table_.first_id = id;
+  }
+  // The body-frame points for posing in the solver's execution space (SolverBase::pose_grains).
+  const GrainPointTable& table() const { return table_; }
 
  private:
   // The grain and template point of grain particle k (id - first_id).
@@ -66,6 +72,7 @@ class GrainCoupling {
   std::vector<GrainBoundaryShape> shapes_;  // per template
   std::vector<Real> reach_;                 // per template: max |point| and |ghost node|
   std::vector<Index> first_point_;          // per grain, and the total: a prefix sum
+  GrainPointTable table_;
   GlobalId first_id_ = 0;
   Real mass_ = 0, rho0_ = 1000;
 };

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/exec.hpp"
+#include "coupling/grain_pose.hpp"
 #include "scene/scene.hpp"
 #include "solver/exchange.hpp"
 #include "solver/fluid_params.hpp"
@@ -70,14 +71,22 @@ class SolverBase {
   // Restart support: the counters, and replacing the whole state (particles and counters).
   virtual SolverCounters counters() const = 0;
   virtual void restore(ParticleSet<Host> particles, const SolverCounters& c) = 0;
-  // SPH-DEM coupling (lib/coupling): `f` moves the grain boundary slots (positions, ghost nodes,
-  // normals, velocities) in host memory; the boundary range is then re-sorted.
-  virtual void move_grains(const std::function<void(ParticleSet<Host>&)>& f) = 0;
+  // SPH-DEM coupling (lib/coupling): poses the grain boundary slots (positions, ghost nodes,
+  // normals, velocities) from the bodies' state in the execution space (pose_grain_point), then
+  // re-sorts the grain range. `table` is uploaded when a different one is passed; pass the
+  // coupling's own each step.
+  virtual void pose_grains(const GrainPointTable& table,
+                           const std::vector<dem::RigidBody>& bodies) = 0;
+  // The grain slots alone in host memory (every field; n_grain set), for the loads on the grains
+  // (GrainCoupling::loads): on the device only the grain range is downloaded. grain_mine(): many
+  // ranks, 1 for each of them this rank owns (empty on one rank).
+  virtual const ParticleSet<Host>& grain_particles() = 0;
+  virtual std::vector<std::uint8_t> grain_mine() const = 0;
   // Many ranks (DESIGN.md §5, "Grains"): no rank holds every grain boundary particle. At each
   // neighbour rebuild the solver takes from `source` the posed grain particles that may reach its
   // box [lo, hi] (GrainCoupling::generate), keeps those whose ghost node (DBC: position) it owns,
-  // and receives copies of the other ranks' within the halo width. Between rebuilds `f` of
-  // move_grains poses the slots held. `total`: the grain particles of all ranks, which the owned
+  // and receives copies of the other ranks' within the halo width. Between rebuilds pose_grains
+  // poses the slots held. `total`: the grain particles of all ranks, which the owned
   // ones must add up to at every rebuild. Required on many ranks when there are grains.
   using GrainSource = std::function<ParticleSet<Host>(const Vec3& lo, const Vec3& hi)>;
   virtual void set_grain_source(GrainSource source, Index total) = 0;

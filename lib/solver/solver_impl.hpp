@@ -213,12 +213,60 @@ class Solver final : public SolverBase {
   // Grains on many ranks (set_grain_source): each rank holds the grain particles it owns and
   // copies of others' near its box, and poses all of them from the replicated DEM state; the
   // owner computes a particle's mDBC state and the grain halo plan copies it out.
-  void move_grains(const std::function<void(ParticleSet<Host>&)>& f) override {
+  void pose_grains(const GrainPointTable& t, const std::vector<dem::RigidBody>& bodies) override {
     if (ex_ && ps_.n_grain > 0 && !grain_source_)
-      throw std::logic_error("Solver::move_grains: grains on many ranks need set_grain_source");
-    on_host([&](ParticleSet<Host>& h) { f(h); });
+      throw std::logic_error("Solver::pose_grains: grains on many ranks need set_grain_source");
+    if (table_of_ != &t) {
+      put_space(tpl_pos_, t.pos);
+      put_space(tpl_ghost_, t.ghost);
+      put_space(tpl_normal_, t.normal);
+      put_space(tpl_first_, t.template_first);
+      put_space(grain_first_, t.grain_first);
+      table_of_ = &t;
+    }
+    put_space(bodies_, bodies);
+    host_valid_ = false;
+    ParticleView v = ps_.view();
+    const Index gb = ps_.wall_begin() + ps_.n_wall, ng = ps_.n_grain;
+    const GlobalId first_id = t.first_id;
+    const Vec3* tp = tpl_pos_.data();
+    const Vec3* tg = tpl_ghost_.data();
+    const Vec3* tn = tpl_normal_.data();
+    const std::uint32_t* tf = tpl_first_.data();
+    const std::uint32_t* gf = grain_first_.data();
+    const dem::RigidBody* b = bodies_.data();
+    for_each(
+        Space{}, ng, SPHDEM_LAMBDA(Index k) {
+          const Index i = gb + k;
+          const std::uint32_t g = std::uint32_t(kGrainBodyBase - v.body[i]);
+          const dem::RigidBody& body = b[g];
+          const std::uint32_t at = tf[body.shape] + std::uint32_t(v.id[i] - first_id) - gf[g];
+          pose_grain_point(body, tp[at], tg[at], tn[at], v.pos[i], v.ghost[i], v.normal[i],
+                           v.vel[i]);
+          v.ghost_alt[i] = v.ghost[i];
+        });
     sort_grains();
     mark_grain_owners();
+  }
+
+  const ParticleSet<Host>& grain_particles() override {
+    const Index gb = ps_.wall_begin() + ps_.n_wall, ng = ps_.n_grain;
+    std::vector<void*> dst;
+    grain_host_.for_each_field([&](const char*, auto& b) { dst.push_back(&b); });
+    std::size_t k = 0;
+    ps_.for_each_field([&](const char*, auto& field) {
+      using T = std::decay_t<decltype(field.data()[0])>;
+      auto* d = static_cast<Buffer<T, Host>*>(dst[k++]);
+      d->resize(std::size_t(ng));
+      field.download_range(d->data(), std::size_t(gb), std::size_t(ng));
+    });
+    grain_host_.n_fluid = grain_host_.n_halo = grain_host_.n_wall = 0;
+    grain_host_.n_grain = ng;
+    return grain_host_;
+  }
+  std::vector<std::uint8_t> grain_mine() const override {
+    if (mine_host_.size() < std::size_t(ps_.n_wall)) return {};
+    return std::vector<std::uint8_t>(mine_host_.begin() + ps_.n_wall, mine_host_.end());
   }
   void set_grain_source(GrainSource source, Index total) override {
     grain_source_ = std::move(source);
@@ -981,6 +1029,12 @@ class Solver final : public SolverBase {
   Buffer<std::uint32_t, Space> root_at_, leaf_at_;  // current owned/halo slot -> plan root/leaf
   Buffer<std::uint32_t, Space> follow_scratch_;
   Buffer<std::uint32_t, Space> wall_roots_, wall_leaves_;  // the wall plan's slots (from wall 0)
+  // Grain posing (pose_grains): the coupling's point table as uploaded, and the bodies.
+  const GrainPointTable* table_of_ = nullptr;
+  Buffer<Vec3, Space> tpl_pos_, tpl_ghost_, tpl_normal_;
+  Buffer<std::uint32_t, Space> tpl_first_, grain_first_;
+  Buffer<dem::RigidBody, Space> bodies_;
+  ParticleSet<Host> grain_host_;      // grain_particles()
   Buffer<Vec3, Space> pos_at_build_;  // owned positions at the last rebuild, by root
   // Packed halo values in the execution space and their host stages, per field type.
   template <class T>
