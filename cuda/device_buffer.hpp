@@ -58,6 +58,10 @@ class Buffer<T, Device> {
   void download_range(T* out, std::size_t b, std::size_t n) const {
     if (n > 0) cuda::copy_to_host(out, p_ + b, n * sizeof(T));
   }
+  // n values from host memory into slots [b, b + n).
+  void upload_range(const T* in, std::size_t b, std::size_t n) {
+    if (n > 0) cuda::copy_to_device(p_ + b, in, n * sizeof(T));
+  }
 
  private:
   T* p_ = nullptr;

@@ -151,6 +151,9 @@ class Buffer<T, Host> {
   void download_range(T* out, std::size_t b, std::size_t n) const {
     std::copy(v_.begin() + std::ptrdiff_t(b), v_.begin() + std::ptrdiff_t(b + n), out);
   }
+  void upload_range(const T* in, std::size_t b, std::size_t n) {
+    std::copy(in, in + n, v_.begin() + std::ptrdiff_t(b));
+  }
 
  private:
   std::vector<T> v_;

@@ -667,13 +667,12 @@ class Solver final : public SolverBase {
     if (grain_source_ && !grains_built_) local = 1;
     if (grains_built_ && !local) {   // grain particles and their ghost nodes (rotation moves them
       std::vector<Vec3> ptmp, gtmp;  // further than the particles)
-      const Vec3* pos = get_host<Vec3>(ps_.pos, ptmp);
-      const Vec3* ghost = get_host<Vec3>(ps_.ghost, gtmp);
-      const Index gb = ps_.wall_begin() + ps_.n_wall;
+      const Vec3* pos = grain_range(ps_.pos, ptmp);
+      const Vec3* ghost = grain_range(ps_.ghost, gtmp);
       for (Index k = 0; k < ps_.n_grain; ++k) {
         const std::size_t t = grain_at_[std::size_t(k)];
-        drift2 = std::max({drift2, norm2(pos[gb + k] - grain_pos_at_build_[t]),
-                           norm2(ghost[gb + k] - grain_ghost_at_build_[t])});
+        drift2 = std::max({drift2, norm2(pos[k] - grain_pos_at_build_[t]),
+                           norm2(ghost[k] - grain_ghost_at_build_[t])});
       }
     }
     const Real half = Real(0.5) * scene_.parallel.skin * p_.h;
@@ -971,7 +970,7 @@ class Solver final : public SolverBase {
     if (!grain_source_) return;
     host_valid_ = false;
     std::vector<T> tmp;
-    T* f = get_host<T>(field, tmp) + ps_.wall_begin() + ps_.n_wall;
+    T* f = grain_range(field, tmp);
     const Index ng = ps_.n_grain, no = n_grain_owned_;
     std::vector<T> roots(std::size_t(std::max<Index>(no, 1)), T());
     std::vector<T> leaves(std::size_t(std::max<Index>(ng - no, 1)), T());
@@ -996,7 +995,26 @@ class Solver final : public SolverBase {
         f[k] = leaves[std::size_t(t - no)];
       }
     }
-    put_host<T>(field, tmp);
+    put_grain_range(field, tmp);
+  }
+
+  // The grain range of a field in host memory: the field itself on the host; on the device a
+  // download of that range only, which put_grain_range uploads back.
+  template <class T>
+  T* grain_range(Buffer<T, Space>& field, std::vector<T>& tmp) {
+    const Index gb = ps_.wall_begin() + ps_.n_wall, ng = ps_.n_grain;
+    if constexpr (std::is_same_v<Space, Host>) {
+      return field.data() + gb;
+    } else {
+      tmp.resize(std::size_t(ng));
+      field.download_range(tmp.data(), std::size_t(gb), std::size_t(ng));
+      return tmp.data();
+    }
+  }
+  template <class T>
+  void put_grain_range(Buffer<T, Space>& field, const std::vector<T>& tmp) {
+    if constexpr (!std::is_same_v<Space, Host>)
+      field.upload_range(tmp.data(), std::size_t(ps_.wall_begin() + ps_.n_wall), tmp.size());
   }
 
   // Splits the grain slots (the set's tail, after grains_last) off into a set of their own.
