@@ -26,6 +26,12 @@ the case without boulders; the V layouts as built are not symmetric, and grains 
 mirrored): `symmetry: {axis: y, at: 0.2}`, whose diagnostics are the full scene's
 (docs/VALIDATION.md, "Symmetry plane").
 
+--trend CSV draws OUT/<CSV name>_trend.png from a fraction study's summary table instead of
+running: the middle-wall and total peaks (0.05 s running mean) and the largest run-up against
+the solid fraction, one point per beads_N row (empty cells are skipped).
+
+  python3 jobs/flume_study.py --out docs/figures --trend docs/figures/flume_fraction_dp5.csv
+
 Each run goes to OUT/<case>/ and is skipped if OUT/<case>/summary.json says it completed (so an
 interrupted study continues). Extra --set options apply to every case.
 """
@@ -180,6 +186,29 @@ def summarize(run_dir, until=float("inf")):
     }
 
 
+def trend(table, out):
+    """Peaks and run-up against the solid fraction, from a fraction study's summary table."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fraction = {"beads_%d" % n: float(f.rstrip("%")) for f, n in FRACTIONS}
+    with open(table) as f:
+        rows = [r for r in csv.DictReader(f) if r["preset"] in fraction]
+    rows.sort(key=lambda r: fraction[r["preset"]])
+    panels = [("peak_mid_50ms", "middle-wall peak (N)"), ("peak_total_50ms", "total peak (N)"),
+              ("max_runup", "largest run-up (m)")]
+    fig, axes = plt.subplots(1, 3, figsize=(10, 3.2))
+    for ax, (col, label) in zip(axes, panels):
+        pts = [(fraction[r["preset"]], float(r[col])) for r in rows if r.get(col, "") != ""]
+        ax.plot([p[0] for p in pts], [p[1] for p in pts], "o-")
+        ax.set_xlabel("solid volume fraction (%)")
+        ax.set_ylabel(label)
+    fig.tight_layout()
+    path = os.path.join(out, os.path.splitext(os.path.basename(table))[0] + "_trend.png")
+    fig.savefig(path, dpi=120)
+    print("wrote", path)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     ap.add_argument("--out", required=True)
@@ -192,8 +221,13 @@ def main():
                     help="summarize rows up to this time only (compare cases that ended early)")
     ap.add_argument("--symmetry", action="store_true",
                     help="model half of the cases symmetric about y = 0.2 (P00, no boulders)")
+    ap.add_argument("--trend", metavar="CSV",
+                    help="draw the fraction trend from this summary table and stop")
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
+    if a.trend:
+        trend(a.trend, a.out)
+        return
     results = []
     for p, scene, case_sets in cases(a.study, a.presets):
         run_dir = os.path.join(a.out, p)
