@@ -81,6 +81,17 @@ std::array<int, 3> parse_procs(const std::string& s) {
   return p;
 }
 
+namespace {
+// Many ranks: how many of the scene's fixed-wall particles each rank holds (its box plus halo).
+void log_walls_held(const MpiExchange& ex, SolverBase& solver, Index total, std::ostream& log) {
+  long long mine = solver.host_particles().n_wall, most = 0, sum = 0;
+  MPI_Allreduce(&mine, &most, 1, MPI_LONG_LONG, MPI_MAX, ex.comm());
+  MPI_Allreduce(&mine, &sum, 1, MPI_LONG_LONG, MPI_SUM, ex.comm());
+  log << "fixed-wall particles per rank (box plus halo): largest share " << most << " of " << total
+      << ", " << sum << " on all ranks with the copies\n";
+}
+}  // namespace
+
 std::unique_ptr<SolverBase> make_solver(
     const Scene& scene, Backend backend, std::ostream& log, BuildReport* report,
     std::shared_ptr<MpiExchange>* exchange, std::array<int, 3> procs,
@@ -162,7 +173,9 @@ std::unique_ptr<SolverBase> make_solver(
           << pr[1] << " x " << pr[2] << " boxes, owned-fluid imbalance (max/mean) "
           << ex->last_imbalance() << "\n";
       if (exchange) *exchange = ex;
-      return make_device_solver(scene, std::move(ps), c0, ex);
+      auto solver = make_device_solver(scene, std::move(ps), c0, ex);
+      log_walls_held(*ex, *solver, rep.wall, log);
+      return solver;
     }
     {
       std::ostringstream cuts;
@@ -180,7 +193,9 @@ std::unique_ptr<SolverBase> make_solver(
         << " ranks as " << pr[0] << " x " << pr[1] << " x " << pr[2]
         << " boxes, owned-fluid imbalance (max/mean) " << ex->last_imbalance() << "\n";
     if (exchange) *exchange = ex;
-    return make_host_solver(scene, std::move(ps), c0, ex);
+    auto solver = make_host_solver(scene, std::move(ps), c0, ex);
+    log_walls_held(*ex, *solver, rep.wall, log);
+    return solver;
   }
   bool device = false;
   if (backend != Backend::kHost) {
@@ -518,7 +533,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
         grain_torque.push_back(dem.system->external_torque(i));
       }
     }
-    if (ex) distribute_after_read(*ex, cp.particles);
+    if (ex) distribute_after_read(*ex, cp.particles, solver->params().mdbc);
     next_diag = cp.next_output_time;
     profile_state = cp.profile_next;
     solver->restore(std::move(cp.particles), cp.counters);

@@ -4,9 +4,12 @@
 //
 // Data layout on a rank: owned fluid [0, n_fluid), halo copies, then the fixed-wall particles near
 // its box, then the grain particles it owns and its copies of other ranks' near its box.
-// Walls are replicated (built identically on every rank); each wall's mDBC state is computed by
-// the rank owning its ghost node and summed over ranks, and the fluid force on a wall particle is
-// held as per-rank shares that add up. Checkpoints and frames take the walls from rank 0 only.
+// Each rank holds only the fixed-wall particles it keeps (keep_walls: within the halo width of its
+// box, or with the ghost node, DBC: the particle, in it). Every rank builds the whole scene once
+// and culls it; after a rebalance or a checkpoint read the walls are dealt to the ranks that keep
+// them (deal_walls), so no rank holds the whole wall set during a run. A wall's mDBC state and
+// fluid force are computed by its owner and copied to the other ranks by the wall plan.
+// Checkpoints and frames take each wall from its owner.
 #pragma once
 
 #include <mpi.h>
@@ -48,6 +51,7 @@ class MpiExchange final : public Exchange {
   }
   std::vector<std::uint8_t> keep_walls(const Vec3* pos, const Vec3* ghost, Index n,
                                        bool by_ghost) const override;
+  ParticleSet<Host> deal_walls(ParticleSet<Host>& walls, bool by_ghost) const override;
   void build_wall_plan(const GlobalId* id, const std::uint8_t* mine, Index n) override {
     walls_.reset();
     walls_.emplace(dd_.comm(), id, mine, n);
@@ -61,6 +65,10 @@ class MpiExchange final : public Exchange {
   void wall_reduce(const Real* leaves, Real* roots) override { walls_->reduce_sum(leaves, roots); }
   void wall_reduce(const Vec3* leaves, Vec3* roots) override { walls_->reduce_sum(leaves, roots); }
   void owned_box(Vec3& lo, Vec3& hi) const override;
+  // Rank r's box, with the outer faces of non-periodic axes at infinity.
+  void box_of(int rank, Vec3& lo, Vec3& hi) const;
+  // Whether rank r keeps a wall particle at pos (ghost node ghost): see keep_walls.
+  bool keeps_wall(int rank, const Vec3& pos, const Vec3& ghost, bool by_ghost) const;
   void build_grain_halo(ParticleSet<Host>& g) override;
   void grain_bcast(const Real* owned, Real* halo) override { grains_->bcast(owned, halo); }
   void grain_bcast(const Vec3* owned, Vec3* halo) override { grains_->bcast(owned, halo); }
@@ -93,8 +101,10 @@ ParticleSet<Host> output_share(const ParticleSet<Host>& ps, const std::vector<st
 ParticleSet<Host> gather_on_root(MPI_Comm comm, const ParticleSet<Host>& ps,
                                  const std::vector<std::uint8_t>& mine);
 
-// After each rank read its block of a checkpoint: every wall particle to every rank, and the
-// fluid to the rank owning it (through DMSwarm). Collective.
-void distribute_after_read(const MpiExchange& ex, ParticleSet<Host>& ps);
+// After each rank read its block of a checkpoint: the wall particles to the ranks that keep them
+// (deal_walls; by_ghost as the run's boundary: mDBC), every grain particle to every rank (each
+// keeps its own at the first neighbour rebuild), and the fluid to the rank owning it (through
+// DMSwarm). Collective.
+void distribute_after_read(const MpiExchange& ex, ParticleSet<Host>& ps, bool by_ghost);
 
 }  // namespace sphdem

@@ -6,9 +6,10 @@
 //   drop the halo -> remove/wrap -> migrate(leavers) -> sort owned by (cell, id)
 //   -> build_halo (every field) -> sort the halo range by (cell, id)
 // and within the step, bcast() refreshes halo copies of fields that changed (the symplectic
-// predictor; mu_eff and the SPS stress). Each rank keeps the fixed-wall particles near its box
-// (keep_walls); a wall's mDBC state and fluid force are computed by its owner (the rank owning the
-// ghost node, or with DBC the particle) and the wall plan copies them to the other ranks' copies.
+// predictor; mu_eff and the SPS stress). Each rank holds only the fixed-wall particles near its
+// box (keep_walls, deal_walls); a wall's mDBC state and fluid force are computed by its owner (the
+// rank owning the ghost node, or with DBC the particle) and the wall plan copies them to the other
+// ranks' copies.
 #pragma once
 
 #include <cstdint>
@@ -51,6 +52,14 @@ class Exchange {
   // by_ghost, with the ghost node in its box).
   virtual std::vector<std::uint8_t> keep_walls(const Vec3* pos, const Vec3* ghost, Index n,
                                                bool by_ghost) const = 0;
+  // Walls to the ranks that keep them, after the boxes changed (rebalance) or a checkpoint read:
+  // each rank passes a set of wall slots only (n_wall = size) that no other rank passes, and gets
+  // back every passed wall it keeps, sorted by global id, with its values as passed. Throws
+  // RuntimeFault if a wall was passed twice or the ranks do not own every passed wall once
+  // afterwards. Collective. An exchange on one rank keeps them all.
+  virtual ParticleSet<Host> deal_walls(ParticleSet<Host>& walls, bool /*by_ghost*/) const {
+    return std::move(walls);
+  }
   // The plan between wall owners and copies (mine: 1 where this rank owns the slot).
   virtual void build_wall_plan(const GlobalId* id, const std::uint8_t* mine, Index n) = 0;
   // The plan's roots (this rank's owned wall slots, in slot order) and leaves (its copies), as

@@ -193,10 +193,10 @@ class Solver final : public SolverBase {
     max_id_ = std::max(max_id_, GlobalId(m));
     global_fluid_ = ex_ ? Index(ex_->sum(std::int64_t(particles.n_fluid))) : particles.n_fluid;
     grains_last(particles);
-    if (ex_) {  // every wall particle into the store; this rank keeps those it can use
+    if (ex_) {  // this rank keeps the walls it can use (the set may hold every wall particle)
       ParticleSet<Host> grains = take_grains(particles);
-      wall_store_ = take_walls(particles);
-      append_walls(particles, select_walls());
+      ParticleSet<Host> walls = take_walls(particles);
+      append_walls(particles, select_walls(walls));
       append_grains(particles, std::move(grains));
     }
     to_space(Space{}, std::move(particles), ps_);
@@ -751,16 +751,17 @@ class Solver final : public SolverBase {
     return w;
   }
 
-  // The store's walls this rank keeps (near its box, or whose ghost node it owns).
-  ParticleSet<Host> select_walls() const {
-    const Index n = wall_store_.n_wall;
+  // The walls of `all` (wall slots only, sorted by id) this rank keeps (near its box, or whose
+  // ghost node it owns).
+  ParticleSet<Host> select_walls(ParticleSet<Host>& all) const {
+    const Index n = all.n_wall;
     const std::vector<std::uint8_t> keep =
-        ex_->keep_walls(wall_store_.pos.data(), wall_store_.ghost.data(), n, p_.mdbc);
+        ex_->keep_walls(all.pos.data(), all.ghost.data(), n, p_.mdbc);
     std::vector<Index> slots;
     for (Index i = 0; i < n; ++i)
       if (keep[std::size_t(i)]) slots.push_back(i);
-    auto& store = const_cast<ParticleSet<Host>&>(wall_store_);  // read only
-    ParticleSet<Host> w = copy_slots(store, slots);
+    if (Index(slots.size()) == n) return std::move(all);
+    ParticleSet<Host> w = copy_slots(all, slots);
     w.n_wall = Index(slots.size());
     return w;
   }
@@ -789,14 +790,15 @@ class Solver final : public SolverBase {
     ps.n_wall = w.n_wall;
   }
 
-  // After a rebalance: this rank's walls from the store for its new box. DBC walls carry their
-  // integrated density, so the store takes the owners' current values first.
+  // After a rebalance: the walls each rank owned under the old boxes are dealt to the ranks that
+  // keep them under the new ones (Exchange::deal_walls). Owners hold a wall's current values (DBC:
+  // its integrated density), so nothing is lost.
   void reselect_walls() {
-    store_wall_density();
     on_host([&](ParticleSet<Host>& h) {
       ParticleSet<Host> grains = take_grains(h);
-      take_walls(h);
-      append_walls(h, select_walls());
+      std::vector<std::uint8_t> owned(mine_host_.begin(), mine_host_.begin() + h.n_wall);
+      ParticleSet<Host> walls = owned_walls(h, owned);
+      append_walls(h, ex_->deal_walls(walls, p_.mdbc));
       append_grains(h, std::move(grains));
     });
     rate_.resize(std::size_t(ps_.size()));
@@ -804,53 +806,50 @@ class Solver final : public SolverBase {
     mark_wall_owners();
   }
 
+  // Moves the wall slots out of a host set without grains (as take_walls) and returns those
+  // flagged in `owned` (one flag per wall slot, in slot order), sorted by id.
+  static ParticleSet<Host> owned_walls(ParticleSet<Host>& h,
+                                       const std::vector<std::uint8_t>& owned) {
+    const Index wb = h.wall_begin();
+    std::vector<std::pair<GlobalId, std::uint8_t>> flag;
+    for (std::size_t k = 0; k < owned.size(); ++k) flag.emplace_back(h.id[wb + Index(k)], owned[k]);
+    std::sort(flag.begin(), flag.end());
+    ParticleSet<Host> all = take_walls(h);
+    std::vector<Index> slots;
+    for (Index i = 0; i < all.n_wall; ++i)
+      if (flag[std::size_t(i)].second) slots.push_back(i);
+    ParticleSet<Host> w = copy_slots(all, slots);
+    w.n_wall = Index(slots.size());
+    return w;
+  }
+
   // A gate that opens (scene.hpp Solid::removed_at): the boundary particles of solid `solid`
-  // leave the run, on this rank and (many ranks) in the wall store. Halo copies are dropped and
-  // rebuilt by the next step. Returns how many boundary particles went (all ranks' walls: the
-  // store holds every one).
+  // leave the run. Halo copies are dropped and rebuilt by the next step. Returns how many
+  // boundary particles went, over all ranks (each counted by its owner).
   Index remove_solid(std::int32_t solid) override {
-    if (ex_) store_wall_density();
     ParticleSet<Host> h;
     if constexpr (std::is_same_v<Space, Host>) {
       h = std::move(ps_);
     } else {
       to_host(Space{}, ps_, h);
     }
+    std::int64_t removed = 0;
+    for (Index k = 0; k < h.n_wall; ++k)
+      if (h.body[std::size_t(h.wall_begin() + k)] == solid && (!ex_ || mine_host_[std::size_t(k)]))
+        ++removed;
     ParticleSet<Host> grains = take_grains(h);
     ParticleSet<Host> walls = take_walls(h);
     h.for_each_field([&](const char*, auto& b) { b.vec().resize(std::size_t(h.n_fluid)); });
     h.n_halo = 0;
-    ParticleSet<Host>& all = ex_ ? wall_store_ : walls;
     std::vector<Index> slots;
-    for (Index i = 0; i < all.n_wall; ++i)
-      if (all.body[std::size_t(i)] != solid) slots.push_back(i);
-    ParticleSet<Host> kept = copy_slots(all, slots);
+    for (Index i = 0; i < walls.n_wall; ++i)
+      if (walls.body[std::size_t(i)] != solid) slots.push_back(i);
+    ParticleSet<Host> kept = copy_slots(walls, slots);
     kept.n_wall = Index(slots.size());
-    const Index removed = all.n_wall - kept.n_wall;
     append_walls(h, std::move(kept));
     append_grains(h, std::move(grains));
     adopt(std::move(h));
-    return removed;
-  }
-
-  // Many ranks, DBC: wall particles carry their integrated density, so before the store's walls
-  // are handed out again it takes the owners' current values.
-  void store_wall_density() {
-    if (!p_.mdbc) {
-      const ParticleSet<Host>& h = host_particles();
-      const Index b = h.wall_begin(), n = h.size() - b;
-      std::vector<Real> rho(std::size_t(wall_store_.n_wall), Real(0));
-      for (Index k = 0; k < n; ++k) {
-        if (!mine_host_[std::size_t(k)]) continue;
-        const auto& ids = wall_store_.id.vec();
-        const auto at = std::lower_bound(ids.begin(), ids.end(), h.id[std::size_t(b + k)]);
-        rho[std::size_t(at - ids.begin())] = h.rho[std::size_t(b + k)];
-      }
-      ex_->sum(rho.data(), Index(rho.size()));
-      wall_store_.rho.vec() = rho;
-      for (std::size_t i = 0; i < rho.size(); ++i)
-        wall_store_.press[i] = tait_pressure(p_.eos, rho[i]);
-    }
+    return Index(ex_ ? ex_->sum(removed) : removed);
   }
 
   // Which wall and grain slots this rank computes: those whose mDBC ghost node (or, with DBC,
@@ -1086,7 +1085,6 @@ class Solver final : public SolverBase {
   bool built_ = false;
   std::int64_t rebuilds_ = 0;
   std::vector<std::uint8_t> mine_host_;  // wall slots this rank owns (many ranks only)
-  ParticleSet<Host> wall_store_;         // every wall particle, by id (many ranks only)
   Index global_fluid_ = 0;
   Buffer<Real, Space> rate_;
   Buffer<Real, Space> visc_;
