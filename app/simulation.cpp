@@ -90,6 +90,23 @@ void log_walls_held(const MpiExchange& ex, SolverBase& solver, Index total, std:
   log << "fixed-wall particles per rank (box plus halo): largest share " << most << " of " << total
       << ", " << sum << " on all ranks with the copies\n";
 }
+
+// Puts the wall slots of `built` (a build: fluid, then walls) into `ps`, which holds none,
+// between its fluid and its grain particles.
+void insert_walls(ParticleSet<Host>& ps, ParticleSet<Host>& built) {
+  if (ps.n_wall != 0 || ps.n_halo != 0)
+    throw std::logic_error("insert_walls: the set already holds walls or a halo");
+  const Index nf = ps.n_fluid, wb = built.wall_begin(), nw = built.n_wall;
+  std::vector<void*> from;
+  built.for_each_field([&](const char*, auto& b) { from.push_back(&b); });
+  std::size_t k = 0;
+  ps.for_each_field([&](const char*, auto& f) {
+    const auto& b = static_cast<std::decay_t<decltype(f)>*>(from[k++])->vec();
+    auto& v = f.vec();
+    v.insert(v.begin() + nf, b.begin() + wb, b.begin() + wb + nw);
+  });
+  ps.n_wall = nw;
+}
 }  // namespace
 
 std::unique_ptr<SolverBase> make_solver(
@@ -97,7 +114,11 @@ std::unique_ptr<SolverBase> make_solver(
     std::shared_ptr<MpiExchange>* exchange, std::array<int, 3> procs,
     const std::function<void(ParticleSet<Host>&, BuildReport&)>& prepare) {
   BuildReport rep;
-  ParticleSet<Host> ps = build_particles(scene, &rep);
+  // Many ranks: no wall is stored until the boxes are known (they come from the fluid).
+  const bool many = world_size() > 1;
+  ParticleSet<Host> ps = build_particles(
+      scene, &rep,
+      many ? WallFilter([](const Vec3&, const Vec3&) { return false; }) : WallFilter{});
   if (world_rank() == 0) describe_thin_solids(rep, scene.sph.dp, log);
   if (prepare) prepare(ps, rep);
   if (report) *report = rep;
@@ -153,6 +174,15 @@ std::unique_ptr<SolverBase> make_solver(
                                             scene.parallel.imbalance);
     keep_owned_fluid(*ex, ps);
     ex->rebalance(ps);  // boxes from the initial histogram (DMSwarm moves the fluid)
+    {
+      // The walls: the scene's lattice again, each rank storing only the walls near its box.
+      const int me = ex->rank();
+      const bool by_ghost = p.mdbc;
+      ParticleSet<Host> built = build_particles(scene, nullptr, [&](const Vec3& x, const Vec3& g) {
+        return ex->keeps_wall(me, x, g, by_ghost);
+      });
+      insert_walls(ps, built);
+    }
     const auto pr = ex->decomposition().procs();
     // One GPU per rank: the node-local rank modulo the GPUs this node has.
     std::string why;
@@ -437,7 +467,8 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
     coupling = std::make_unique<GrainCoupling>(*dem.system, scene.sph.dp, boundary_depth(scene),
                                                scene.fluid.rho0, scene.dim);
     prepare = [&](ParticleSet<Host>& ps, BuildReport& br) {
-      br.fluid -= coupling->append(ps, *dem.system);
+      // Ids after the scene's fluid and walls (on many ranks the set holds no walls yet).
+      br.fluid -= coupling->append(ps, *dem.system, GlobalId(br.fluid + br.wall));
       br.grain = coupling->particle_count();
     };
   }

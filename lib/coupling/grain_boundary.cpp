@@ -75,6 +75,12 @@ void GrainCoupling::pose(ParticleSet<Host>& ps, std::size_t i, const dem::RigidB
 }
 
 Index GrainCoupling::append(ParticleSet<Host>& ps, const dem::DemSystem& sys) {
+  GlobalId max_id = 0;
+  for (Index i = 0; i < ps.size(); ++i) max_id = std::max(max_id, ps.id[std::size_t(i)]);
+  return append(ps, sys, max_id + 1);
+}
+
+Index GrainCoupling::append(ParticleSet<Host>& ps, const dem::DemSystem& sys, GlobalId first_id) {
   // Fluid inside a grain goes.
   std::vector<char> keep(std::size_t(ps.size()), 1);
   Index removed = 0;
@@ -90,9 +96,7 @@ Index GrainCoupling::append(ParticleSet<Host>& ps, const dem::DemSystem& sys) {
       }
     }
   }
-  GlobalId max_id = 0;
-  for (Index i = 0; i < ps.size(); ++i) max_id = std::max(max_id, ps.id[std::size_t(i)]);
-  first_id_ = max_id + 1;
+  first_id_ = first_id;
   table_.first_id = first_id_;
   // Compact in place (fluid first, so every later slot moves down by the fluid removed).
   const Index n_old = ps.size() - removed;

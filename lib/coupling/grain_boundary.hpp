@@ -38,6 +38,9 @@ class GrainCoupling {
   // Removes the fluid inside any grain (phi < 0) and appends the grain boundary particles (ids
   // after every existing id) posed from `sys`. Returns the fluid removed.
   Index append(ParticleSet<Host>& ps, const dem::DemSystem& sys);
+  // As above, the ids from first_id on (a set that holds only some of the scene's walls: the
+  // scene's particle count).
+  Index append(ParticleSet<Host>& ps, const dem::DemSystem& sys, GlobalId first_id);
   // Poses the grain slots of ps from the bodies' current state. every: ps must hold every grain
   // particle (one rank); otherwise any subset (many ranks).
   void place(ParticleSet<Host>& ps, const dem::DemSystem& sys, bool every = true) const;

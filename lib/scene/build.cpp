@@ -118,7 +118,8 @@ void for_lattice(const Scene& scene, Vec3 lo, Vec3 hi, F&& f) {
 
 }  // namespace
 
-ParticleSet<Host> build_particles(const Scene& scene, BuildReport* report) {
+ParticleSet<Host> build_particles(const Scene& scene, BuildReport* report,
+                                  const WallFilter& keep_wall) {
   const Real dp = scene.sph.dp;
   const Real mass = scene.fluid.rho0 * std::pow(dp, Real(scene.dim));
   const Real gmag = norm(scene.gravity);
@@ -182,6 +183,9 @@ ParticleSet<Host> build_particles(const Scene& scene, BuildReport* report) {
   std::vector<Index> thin_count(scene.solids.size(), 0);
   std::vector<Vec3> bpos, bghost, balt, bnormal;
   std::vector<std::int32_t> bbody;
+  std::vector<Index> bnumber;  // each stored wall's number among all the scene's walls
+  std::vector<Index> by_solid(scene.solids.size(), 0);
+  Index walls_made = 0;
   // The domain bounds the fluid; walls may lie up to `depth` outside it (non-periodic axes).
   Vec3 lo = scene.domain_lo, hi = scene.domain_hi;
   for (int k = 0; k < 3; ++k) {
@@ -258,8 +262,13 @@ ParticleSet<Host> build_particles(const Scene& scene, BuildReport* report) {
       thin_min[s] = thin_count[s] == 0 ? t : std::min(thin_min[s], t);
       ++thin_count[s];
     }
+    const Vec3 ghost = x + n * (Real(2) * depth_x);
+    ++by_solid[std::size_t(which)];
+    const Index number = walls_made++;
+    if (keep_wall && !keep_wall(x, ghost)) return;
+    bnumber.push_back(number);
     bpos.push_back(x);
-    bghost.push_back(x + n * (Real(2) * depth_x));
+    bghost.push_back(ghost);
     if (searched)
       balt.push_back(alt_ghost);
     else
@@ -283,7 +292,7 @@ ParticleSet<Host> build_particles(const Scene& scene, BuildReport* report) {
   }
   for (Index k = 0; k < ps.n_wall; ++k) {
     const Index i = ps.wall_begin() + k;
-    ps.id[i] = next_id++;
+    ps.id[i] = next_id + GlobalId(bnumber[std::size_t(k)]);
     ps.pos[i] = bpos[std::size_t(k)];
     ps.ghost[i] = bghost[std::size_t(k)];
     ps.ghost_alt[i] = balt[std::size_t(k)];
@@ -292,9 +301,8 @@ ParticleSet<Host> build_particles(const Scene& scene, BuildReport* report) {
     ps.mass[i] = mass;
   }
   rep.fluid = ps.n_fluid;
-  rep.wall = ps.n_wall;
-  rep.wall_by_solid.assign(scene.solids.size(), 0);
-  for (std::int32_t b : bbody) ++rep.wall_by_solid[std::size_t(b)];
+  rep.wall = walls_made;
+  rep.wall_by_solid = by_solid;
   if (sym.enabled()) {
     // The walls near the plane on the modelled side and their mirror images: a run that models
     // half of a scene equals the full run only if they are there.

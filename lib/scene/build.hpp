@@ -3,6 +3,7 @@
 // mDBC ghost nodes r_G = r_B - 2 phi grad phi.
 #pragma once
 
+#include <functional>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -36,7 +37,13 @@ struct BuildReport {
 // thickness, the boundary depth and the remedy; nothing when no solid is thin.
 void describe_thin_solids(const BuildReport& report, Real dp, std::ostream& os);
 
-ParticleSet<Host> build_particles(const Scene& scene, BuildReport* report = nullptr);
+// Which fixed-wall particles a build stores (many ranks: those near this rank's box, by position
+// and mDBC ghost node). Every wall particle is still generated, numbered and counted in the
+// report, so ids and counts do not depend on the filter; only the kept ones are stored.
+using WallFilter = std::function<bool(const Vec3& pos, const Vec3& ghost)>;
+
+ParticleSet<Host> build_particles(const Scene& scene, BuildReport* report = nullptr,
+                                  const WallFilter& keep_wall = {});
 
 // Speed of sound: scene value, or c0_factor * 2 sqrt(g H) with H the deepest fluid column:
 // 2 sqrt(g H) is the dam-break front speed (Ritter), the fastest a column of depth H flows.
