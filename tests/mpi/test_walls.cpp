@@ -64,6 +64,10 @@ WallScene wall_scene(bool mdbc) {
   std::sort(slots.begin(), slots.end(),
             [&](Index a, Index b) { return w.all.id[std::size_t(a)] < w.all.id[std::size_t(b)]; });
   w.walls = slice_slots(w.all, slots);
+  // A distinct density per wall (a built scene has rho0 on all), so the value check below would
+  // see a wall that arrived with another wall's values.
+  for (Index i = 0; i < w.walls.n_wall; ++i)
+    w.walls.rho[std::size_t(i)] = Real(1000) + Real(i) * Real(1e-3);
   return w;
 }
 
@@ -90,12 +94,15 @@ bool dealt_as_kept(const MpiExchange& ex, const WallScene& w, ParticleSet<Host> 
   const ParticleSet<Host> got = ex.deal_walls(share, mdbc);
   const std::vector<GlobalId> want = kept_ids(ex, w.walls, mdbc);
   std::vector<GlobalId> have(got.id.vec().begin(), got.id.vec().end());
+  // Each rank checks its own share; every rank then reaches the same collectives below, whether
+  // or not its checks failed (a rank that returned early would leave the others waiting).
+  bool ok = true;
   if (have != want) {
     *why = "rank " + std::to_string(mpitest::rank()) + " holds " + std::to_string(have.size()) +
            " walls, the brute-force selection " + std::to_string(want.size());
-    return all_ranks(false);
+    ok = false;
   }
-  for (Index k = 0; k < got.n_wall; ++k) {  // by id: the whole set is sorted by id
+  for (Index k = 0; ok && k < got.n_wall; ++k) {  // by id: the whole set is sorted by id
     const auto at =
         std::lower_bound(w.walls.id.vec().begin(), w.walls.id.vec().end(), got.id[std::size_t(k)]) -
         w.walls.id.vec().begin();
@@ -104,7 +111,7 @@ bool dealt_as_kept(const MpiExchange& ex, const WallScene& w, ParticleSet<Host> 
         got.rho[std::size_t(k)] != w.walls.rho[std::size_t(at)] ||
         got.body[std::size_t(k)] != w.walls.body[std::size_t(at)]) {
       *why = "wall id " + std::to_string(got.id[std::size_t(k)]) + " arrived with other values";
-      return all_ranks(false);
+      ok = false;
     }
   }
   // Together the ranks hold each wall at least once; per box, no rank holds them all.
@@ -117,9 +124,9 @@ bool dealt_as_kept(const MpiExchange& ex, const WallScene& w, ParticleSet<Host> 
   if ((per_box && most >= w.walls.n_wall) || sum < w.walls.n_wall) {
     *why = "largest share " + std::to_string(most) + ", sum " + std::to_string(sum) + " of " +
            std::to_string(w.walls.n_wall) + " walls";
-    return all_ranks(false);
+    ok = false;
   }
-  return all_ranks(true);
+  return all_ranks(ok);
 }
 
 TEST(WallsPerBox, DealGivesEachRankTheWallsNearItsBox) {
