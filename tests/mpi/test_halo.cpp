@@ -121,7 +121,9 @@ void run_case(const Case& c) {
   const Real width = kRadius;
   const HaloPlan plan(dd, ps, width);
   plan.fill(ps);
-  ASSERT_EQ(ps.n_halo, plan.n_halo());
+  // Collective, so that a mismatch on one rank stops every rank here (an ASSERT on one rank
+  // alone would leave the others waiting in the reductions below).
+  ASSERT_TRUE(all_ranks(ps.n_halo == plan.n_halo())) << "fill() stored a different halo count";
 
   // Exactly the expected copies, each with every field of its original (position shifted).
   std::vector<std::tuple<GlobalId, Real, Real, Real>> got;
