@@ -249,14 +249,21 @@ std::unique_ptr<SolverBase> make_solver(
 
 namespace {
 
-// Writes every particle as CSV: the emergency state dump when a guard fires.
+// Writes every particle as CSV: the emergency state dump when a guard fires. Roles: fluid (owned),
+// halo (on many ranks, a copy of another rank's fluid particle as last refreshed: its owner's
+// file holds the current state), wall, grain.
 void write_state_csv(const ParticleSet<Host>& ps, const std::string& path) {
   std::ofstream f(path);
   f << "id,role,x,y,z,vx,vy,vz,rho,p\n" << std::setprecision(12);
+  const Index grain_begin = ps.wall_begin() + ps.n_wall;
   for (Index i = 0; i < ps.size(); ++i) {
-    f << ps.id[i] << ',' << (i < ps.n_fluid ? "fluid" : "boundary") << ',' << ps.pos[i].x << ','
-      << ps.pos[i].y << ',' << ps.pos[i].z << ',' << ps.vel[i].x << ',' << ps.vel[i].y << ','
-      << ps.vel[i].z << ',' << ps.rho[i] << ',' << ps.press[i] << '\n';
+    const char* role = i < ps.n_fluid        ? "fluid"
+                       : i < ps.wall_begin() ? "halo"
+                       : i < grain_begin     ? "wall"
+                                             : "grain";
+    f << ps.id[i] << ',' << role << ',' << ps.pos[i].x << ',' << ps.pos[i].y << ',' << ps.pos[i].z
+      << ',' << ps.vel[i].x << ',' << ps.vel[i].y << ',' << ps.vel[i].z << ',' << ps.rho[i] << ','
+      << ps.press[i] << '\n';
   }
 }
 
@@ -612,6 +619,26 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
     const ParticleSet<Host> all = gathered();
     if (root) diag.write(solver->time(), all, p);
   };
+  // The Mach guard's particle: the fastest fluid particle over all ranks (every rank calls this
+  // together, since the step's reductions agree).
+  auto locate_fastest = [&]() -> std::string {
+    FastestFluid f = fastest_fluid(solver->host_particles());
+    if (ex) {
+      struct {
+        double speed;
+        int rank;
+      } mine{f.speed, rank}, top{};
+      MPI_Allreduce(&mine, &top, 1, MPI_DOUBLE_INT, MPI_MAXLOC, comm);
+      double buf[8] = {f.speed,         double(f.pos.x), double(f.pos.y), double(f.pos.z),
+                       double(f.vel.x), double(f.vel.y), double(f.vel.z), double(f.rho)};
+      std::uint64_t id = f.id;
+      MPI_Bcast(buf, 8, MPI_DOUBLE, top.rank, comm);
+      MPI_Bcast(&id, 1, MPI_UINT64_T, top.rank, comm);
+      f = FastestFluid{buf[0], GlobalId(id), Vec3(Real(buf[1]), Real(buf[2]), Real(buf[3])),
+                       Vec3(Real(buf[4]), Real(buf[5]), Real(buf[6])), Real(buf[7])};
+    }
+    return fastest_fluid_text(f);
+  };
   std::unique_ptr<FrameWriter> frames;
   Real next_frame = 0;
   if (scene.frames.every > 0) {
@@ -763,7 +790,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
         log << "t = " << solver->time() << " s: " << st.removed
             << " fluid particles left the domain\n";
       const auto guards_from = clock::now();
-      check_step_guards(scene, p, st, solver->time(), solver->step_count());
+      check_step_guards(scene, p, st, solver->time(), solver->step_count(), locate_fastest);
       if (solver->fluid_count() == 0) {
         log << "t = " << solver->time() << " s: all fluid has left the domain; stopping\n";
         break;

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 
 #include "scene/scene.hpp"
@@ -14,8 +15,23 @@
 namespace sphdem {
 
 // Cheap checks from the step's reductions: dt floor, Mach number, density range, NaN in them.
+// `locate`, when given, is called only when the Mach guard fires and names the fastest particle
+// (fastest_fluid_text); on many ranks every rank calls it (the reductions agree), so it may be
+// collective.
 void check_step_guards(const Scene& scene, const StepParams& p, const StepStats& st, Real time,
-                       std::int64_t step);
+                       std::int64_t step, const std::function<std::string()>& locate = {});
+
+// The fastest fluid particle of a host copy (speed < 0 when it holds no fluid).
+struct FastestFluid {
+  double speed = -1;
+  GlobalId id = 0;
+  Vec3 pos, vel;
+  Real rho = 0;
+};
+FastestFluid fastest_fluid(const ParticleSet<Host>& ps);
+
+// "fluid particle id N at (x, y, z), speed S m/s, velocity (u, v, w), density rho kg/m^3".
+std::string fastest_fluid_text(const FastestFluid& f);
 
 // Per-particle checks on a host copy: NaN/Inf in position, velocity, density; density bounds;
 // fluid inside a solid (deeper than dp/2 below its surface).

@@ -147,6 +147,7 @@ class Solver final : public SolverBase {
     if (!p_.mdbc) {
       integrate_dbc_density(Space{}, v, ps_.wall_begin(), ps_.size(), dt, p_.eos);
     }
+    extremes(st);
     clock_.add(times_.integrate, t2, tick());
     clock_.settle();
     time_ += dt;
@@ -341,7 +342,33 @@ class Solver final : public SolverBase {
     clock_.add(times_.forces, t1, t2);
   }
 
-  // Time-step limits of Eq. (23) with the viscous limit; fills dt and the fluid extremes.
+  // The fastest fluid speed and the density range of the state the step ends with: the state the
+  // guards judge and the emergency dump holds (the rates, and so the limits, saw the state the
+  // step began with).
+  void extremes(StepStats& st) {
+    ParticleView v = view();
+    const Index nf = ps_.n_fluid;
+    Real vmax2 = reduce<MaxOp, Real>(
+        Space{}, nf, SPHDEM_LAMBDA(Index i) { return norm2(v.vel[i]); });
+    st.rho_min = reduce<MinOp, Real>(
+        Space{}, nf, SPHDEM_LAMBDA(Index i) { return v.rho[i]; });
+    st.rho_max = reduce<MaxOp, Real>(
+        Space{}, nf, SPHDEM_LAMBDA(Index i) { return v.rho[i]; });
+    if (ex_) {  // the extremes over all ranks (a rank without fluid gives the identities)
+      const Real lowest = -std::numeric_limits<Real>::max();
+      Real m[3] = {nf ? vmax2 : lowest, nf ? -st.rho_min : lowest, nf ? st.rho_max : lowest};
+      ex_->max(m, 3);
+      vmax2 = m[0];
+      st.rho_min = -m[1];
+      st.rho_max = m[2];
+    }
+    if (global_fluid_ == 0) {  // every fluid particle has left through the open ends
+      st.rho_min = st.rho_max = p_.eos.rho0;
+    }
+    st.max_speed = std::sqrt(std::max(vmax2, Real(0)));
+  }
+
+  // Time-step limits of Eq. (23) with the viscous limit; fills dt.
   StepStats limits(StepStats st) {
     ParticleView v = view();
     const Real* rate = rate_.data();
@@ -350,12 +377,6 @@ class Solver final : public SolverBase {
         Space{}, nf, SPHDEM_LAMBDA(Index i) { return norm2(v.acc[i]); });
     Real rmax = reduce<MaxOp, Real>(
         Space{}, nf, SPHDEM_LAMBDA(Index i) { return rate[i]; });
-    Real vmax2 = reduce<MaxOp, Real>(
-        Space{}, nf, SPHDEM_LAMBDA(Index i) { return norm2(v.vel[i]); });
-    st.rho_min = reduce<MinOp, Real>(
-        Space{}, nf, SPHDEM_LAMBDA(Index i) { return v.rho[i]; });
-    st.rho_max = reduce<MaxOp, Real>(
-        Space{}, nf, SPHDEM_LAMBDA(Index i) { return v.rho[i]; });
     Real nu_max = 0;
     if (p_.hbp) {
       // Explicit viscous limit with the largest mu_eff / rho (kinematic).
@@ -365,20 +386,12 @@ class Solver final : public SolverBase {
     }
     if (ex_) {  // the extremes over all ranks (a rank without fluid gives the identities)
       const Real lowest = -std::numeric_limits<Real>::max();
-      Real m[6] = {nf ? amax2 : lowest,       nf ? rmax : lowest,       nf ? vmax2 : lowest,
-                   nf ? -st.rho_min : lowest, nf ? st.rho_max : lowest, nf ? nu_max : lowest};
-      ex_->max(m, 6);
+      Real m[3] = {nf ? amax2 : lowest, nf ? rmax : lowest, nf ? nu_max : lowest};
+      ex_->max(m, 3);
       amax2 = m[0];
       rmax = m[1];
-      vmax2 = m[2];
-      st.rho_min = -m[3];
-      st.rho_max = m[4];
-      nu_max = m[5];
+      nu_max = m[2];
     }
-    if (global_fluid_ == 0) {  // every fluid particle has left through the open ends
-      st.rho_min = st.rho_max = p_.eos.rho0;
-    }
-    st.max_speed = std::sqrt(std::max(vmax2, Real(0)));
     const Real h = p_.h;
     st.dt_force = amax2 > 0 ? std::sqrt(h / std::sqrt(amax2)) : Real(1e30);
     st.dt_acoustic = h / (p_.eos.c0 + std::max(rmax, Real(0)));

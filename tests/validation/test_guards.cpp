@@ -4,6 +4,8 @@
 // control run with the cause removed shows the same case does not trip the guard.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -93,6 +95,45 @@ void expect_guard(const GuardRun& g, const std::string& cause, std::int64_t max_
   EXPECT_EQ(rows, r.fluid + r.wall + r.grain);
 }
 
+// The Mach guard names the fastest fluid particle; the emergency state (the state the guard
+// judged) holds it at the speed the message gives, which is the message's max speed and the
+// largest speed of any fluid row in the file.
+void expect_fastest_named(const GuardRun& g) {
+  const std::string& m = g.r.failure;
+  const std::size_t at_max = m.find("max speed "),
+                    at_id = m.find("the fastest is fluid particle id ");
+  ASSERT_NE(at_max, std::string::npos) << m;
+  ASSERT_NE(at_id, std::string::npos) << m;
+  const double max_speed = std::stod(m.substr(at_max + 10));
+  const std::string id = std::to_string(std::stoull(m.substr(at_id + 33)));
+  const std::size_t at_speed = m.find(", speed ", at_id);
+  ASSERT_NE(at_speed, std::string::npos) << m;
+  const double named_speed = std::stod(m.substr(at_speed + 8));
+  EXPECT_NEAR(named_speed, max_speed, 1e-5 * max_speed) << m;
+  std::ifstream f(g.out + "/emergency_step" + std::to_string(g.r.steps) + ".csv");
+  std::string line;
+  std::getline(f, line);  // header
+  double row_speed = -1, fastest = -1;
+  while (std::getline(f, line)) {
+    std::stringstream ss(line);
+    std::string cell, role;
+    std::vector<double> v;
+    std::string first;
+    for (int k = 0; std::getline(ss, cell, ','); ++k) {
+      if (k == 0) first = cell;
+      if (k == 1) role = cell;
+      if (k >= 2) v.push_back(std::stod(cell));
+    }
+    if (role != "fluid") continue;
+    const double s = std::sqrt(v[3] * v[3] + v[4] * v[4] + v[5] * v[5]);
+    fastest = std::max(fastest, s);
+    if (first == id) row_speed = s;
+  }
+  ASSERT_GE(row_speed, 0) << "particle " << id << " not in the emergency state";
+  EXPECT_NEAR(row_speed, named_speed, 1e-5 * named_speed) << m;
+  EXPECT_EQ(row_speed, fastest) << "a faster fluid particle is in the file: " << fastest;
+}
+
 void expect_completed(const GuardRun& g) {
   EXPECT_FALSE(g.r.unstable) << g.r.failure;
   EXPECT_NE(read_file(g.out + "/summary.json").find("\"status\": \"completed\""),
@@ -101,13 +142,14 @@ void expect_completed(const GuardRun& g) {
 
 // (a) No density diffusion and CFL = 1 (the schema's maximum) on the dam break: the acoustic
 // step is five times too long and the pressure field blows up within a few dozen steps. The
-// first guard to see it is the Mach guard: max speed 5.7 m/s (Mach 0.17) at step 27, where the
+// first guard to see it is the Mach guard: max speed 5.3 m/s (Mach 0.157) at step 16, where the
 // physical flow is still at a few cm/s.
 TEST(Guards, NoDiffusionHugeCflTripsMachGuard) {
   const GuardRun g =
       run_case(dam_break(), coarse_dam_break({"fluid.diffusion.model=none", "time.cfl=1.0"}),
                "no_diffusion_cfl1");
   expect_guard(g, "Mach number too high", 60);
+  expect_fastest_named(g);
   // The cause is the CFL number: the same scene at CFL 0.2 runs past that time.
   const GuardRun c =
       run_case(dam_break(),
@@ -117,13 +159,14 @@ TEST(Guards, NoDiffusionHugeCflTripsMachGuard) {
 }
 
 // The same without diffusion and with a fixed step of 1 ms (14 acoustic limits): the density of a
-// particle at the bottom leaves [0.7, 1.3] rho0 at step 4, before any speed gets that far.
+// particle at the bottom leaves [0.7, 1.3] rho0 at step 4. The same state is past the Mach bound
+// too (8.5 m/s on that particle); the density guard, checked first, is the one reported.
 TEST(Guards, NoDiffusionFixedLargeStepTripsDensityGuard) {
   const GuardRun g =
       run_case(dam_break(), coarse_dam_break({"fluid.diffusion.model=none", "time.dt_fixed=1e-3"}),
                "no_diffusion_dt1ms");
   expect_guard(g, "density out of bounds", 10);
-  EXPECT_NE(g.r.failure.find("outside [700, 1300]"), std::string::npos) << g.r.failure;
+  EXPECT_NE(g.r.failure.find("] kg/m^3 leaves [700, 1300]"), std::string::npos) << g.r.failure;
 }
 
 // (b) A floor one particle layer thick hit by water at 10 m/s: the fluid goes through the floor.
@@ -161,6 +204,7 @@ TEST(Guards, ThinWallTripsPenetrationGuard) {
 TEST(Guards, LowSoundSpeedTripsMachGuard) {
   const GuardRun g = run_case(dam_break(), coarse_dam_break({"fluid.c0=10"}), "low_c0");
   expect_guard(g, "Mach number too high", 800);
+  expect_fastest_named(g);
   EXPECT_NE(g.r.failure.find("of c0 = 10 m/s"), std::string::npos) << g.r.failure;
   EXPECT_GT(g.r.sim_time, 0.03);  // the flow, not the start, is too fast
 }
