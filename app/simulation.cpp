@@ -314,6 +314,18 @@ class DiagnosticWriter {
       }
       c.push_back("total_fx");
       c.push_back("total_f");
+      // Barrier walls that are also DEM walls: the grains' contact force on each, after the
+      // fluid's (a file of an earlier run keeps its own columns: see CsvSeries::open).
+      for (int k = 1; k <= s.barrier.walls; ++k)
+        if (grain_wall(s, k)) {
+          c.push_back("barrier_" + std::to_string(k) + "_grain_fx");
+          c.push_back("barrier_" + std::to_string(k) + "_grain_f");
+          grain_cols_ = true;
+        }
+      if (grain_cols_) {
+        c.push_back("total_grain_fx");
+        c.push_back("total_grain_f");
+      }
       impact_.open(path("impact_force"), c, append, keep_before);
       runup_.open(path("runup"), {"t", "runup", "x", "y"}, append, keep_before);
       trap_.open(path("trap"),
@@ -322,6 +334,16 @@ class DiagnosticWriter {
                  append, keep_before);
     }
   }
+  // Barrier wall k (1-based) is a DEM wall: grains press on it.
+  static bool grain_wall(const Scene& s, int k) {
+    for (const GrainWall& w : s.dem.walls)
+      if (w.solid == "barrier_" + std::to_string(k)) return true;
+    return false;
+  }
+  // The grains' contact force on each barrier wall (index k - 1) for the next write: the mean over
+  // the last fluid step's DEM sub-steps.
+  void set_barrier_grain_force(std::vector<Vec3> f) { barrier_grain_ = std::move(f); }
+
   std::vector<std::int64_t> profile_state() const {
     return std::vector<std::int64_t>(profile_next_.begin(), profile_next_.end());
   }
@@ -416,6 +438,19 @@ class DiagnosticWriter {
     }
     row.push_back(total.x);
     row.push_back(norm(total));
+    if (grain_cols_) {
+      Vec3 grains;
+      for (int k = 1; k <= scene_.barrier.walls; ++k) {
+        if (!grain_wall(scene_, k)) continue;
+        const std::size_t i = std::size_t(k - 1);
+        const Vec3 f = i < barrier_grain_.size() ? barrier_grain_[i] : Vec3();
+        grains += f;
+        row.push_back(f.x);
+        row.push_back(norm(f));
+      }
+      row.push_back(grains.x);
+      row.push_back(norm(grains));
+    }
     impact_.row(row);
     const Runup r = barrier_runup(scene_.barrier, ps, p.radius2, p.dp);
     runup_.row({t, r.height, r.where.x, r.where.y});
@@ -431,6 +466,8 @@ class DiagnosticWriter {
   std::vector<std::size_t> profile_next_;
   std::vector<std::int32_t> mirror_;  // symmetry plane: each solid's mirror image
   CsvSeries energy_, impact_, runup_, trap_, velocity_;
+  bool grain_cols_ = false;          // impact_force.csv has the grains' columns
+  std::vector<Vec3> barrier_grain_;  // set_barrier_grain_force
 };
 
 // Both to the terminal and to run.log.
@@ -599,6 +636,14 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
     if (!restarting) *bodies_csv << "t,id,x,y,z,vx,vy,vz,wx,wy,wz,fx,fy,fz,tx,ty,tz\n";
   }
   auto write_diagnostics = [&]() {
+    if (coupling && scene.barrier.enabled) {  // the grains' load on each barrier wall
+      std::vector<Vec3> f(std::size_t(std::max(scene.barrier.walls, 0)));
+      for (std::size_t j = 0; j < dem.wall_solid.size(); ++j)
+        for (int k = 1; k <= scene.barrier.walls; ++k)
+          if (dem.wall_solid[j]->name == "barrier_" + std::to_string(k))
+            f[std::size_t(k - 1)] += dem.system->wall_mean_force(dem.wall_index[j]);
+      diag.set_barrier_grain_force(std::move(f));
+    }
     if (bodies_csv) {  // each grain's state and the fluid's force and torque on it
       const auto& bodies = dem.system->bodies();
       for (std::size_t i = 0; i < bodies.size(); ++i) {
@@ -776,6 +821,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
         const int nsub = std::max(1, int(want));
         const Real h = st.dt / Real(nsub);
         timed(lt.dem, [&] {
+          sys.reset_wall_impulse();  // the walls' mean load over this fluid step
           for (int k = 0; k < nsub; ++k) {
             update_walls(scene, dem, sys.time());
             sys.step(h);

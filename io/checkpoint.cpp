@@ -115,6 +115,9 @@ struct DemArrays {
   // Optional (not in checkpoints before 2026-12-02): the last loads and the pair build.
   std::vector<Vec3> ext_force, ext_torque, pairs_built_at;
   std::vector<std::int32_t> pairs_built_motion;
+  // Optional (not before 2026-12-06): the walls' contact impulses and the time they span (1 entry).
+  std::vector<Vec3> wall_impulse;
+  std::vector<Real> wall_impulse_time;
   std::vector<Real> q, mass;  // q: 4 per body (w, x, y, z)
   std::vector<std::int32_t> motion, shape, node;
   std::vector<std::uint64_t> id, master, slave;
@@ -127,10 +130,11 @@ struct DemArrays {
     f("node", node), f("id", id), f("master", master), f("slave", slave);
     f("ext_force", ext_force), f("ext_torque", ext_torque), f("pairs_built_at", pairs_built_at);
     f("pairs_built_motion", pairs_built_motion);
+    f("wall_impulse", wall_impulse), f("wall_impulse_time", wall_impulse_time);
   }
   static bool optional(const std::string& name) {
     return name == "ext_force" || name == "ext_torque" || name == "pairs_built_at" ||
-           name == "pairs_built_motion";
+           name == "pairs_built_motion" || name == "wall_impulse" || name == "wall_impulse_time";
   }
   std::uint64_t checksum() {
     std::uint64_t h = 1469598103934665603ULL;
@@ -161,6 +165,8 @@ DemArrays flatten(const dem::DemState& s) {
   a.ext_torque = s.ext_torque;
   a.pairs_built_at = s.pairs_built_at;
   a.pairs_built_motion = s.pairs_built_motion;
+  a.wall_impulse = s.wall_impulse;
+  if (!s.wall_impulse.empty()) a.wall_impulse_time = {s.wall_impulse_time};
   for (const dem::ContactKey& k : s.keys) {
     a.master.push_back(k.master);
     a.slave.push_back(k.slave);
@@ -194,6 +200,8 @@ dem::DemState unflatten(const DemArrays& a, Real time) {
   s.ext_torque = a.ext_torque;
   s.pairs_built_at = a.pairs_built_at;
   s.pairs_built_motion = a.pairs_built_motion;
+  s.wall_impulse = a.wall_impulse;
+  s.wall_impulse_time = a.wall_impulse_time.empty() ? Real(0) : a.wall_impulse_time.front();
   for (std::size_t i = 0; i < a.master.size(); ++i)
     s.keys.push_back(dem::ContactKey{a.master[i], a.slave[i], std::uint32_t(a.node[i])});
   return s;

@@ -32,6 +32,7 @@ class CsvSeries {
   void open(const std::string& path, const std::vector<std::string>& columns, bool append = false,
             double keep_before = INFINITY) {
     bool fresh = true;
+    if (append) check_header(path, columns);
     if (append && std::isfinite(keep_before)) trim(path, keep_before);
     if (append) {
       if (std::FILE* probe = std::fopen(path.c_str(), "r")) {
@@ -54,6 +55,19 @@ class CsvSeries {
     std::fflush(f_);
   }
   const std::string& path() const { return path_; }
+
+  // A series to be continued must have this run's columns: rows of another width under its
+  // header would be misread. A file that is not there, or is empty, passes.
+  static void check_header(const std::string& path, const std::vector<std::string>& columns) {
+    std::ifstream in(path);
+    std::string have, want;
+    if (!in || !std::getline(in, have)) return;
+    for (std::size_t i = 0; i < columns.size(); ++i) want += (i ? "," : "") + columns[i];
+    if (have != want)
+      throw InputError(path + ": its columns (" + have + ") are not this run's (" + want +
+                       "): it was written by another scene or an earlier sphdem; move it away "
+                       "to restart into this folder");
+  }
 
   // Keeps the header and the rows whose first value is below t (a file that is not there stays
   // so). A row printed at t itself (10 digits) may read back a little below it: it is dropped.

@@ -135,6 +135,8 @@ int DemSystem::add_plane_wall(Vec3 point, Vec3 normal, Vec3 velocity) {
   w.normal = normal / l;
   w.velocity = velocity;
   walls_.push_back(w);
+  wall_force_.emplace_back();
+  wall_impulse_.emplace_back();
   return int(walls_.size()) - 1;
 }
 
@@ -144,6 +146,8 @@ int DemSystem::add_sdf_wall(geom::SdfPtr sdf, Vec3 velocity) {
   w.sdf = std::move(sdf);
   w.velocity = velocity;
   walls_.push_back(w);
+  wall_force_.emplace_back();
+  wall_impulse_.emplace_back();
   return int(walls_.size()) - 1;
 }
 
@@ -481,9 +485,12 @@ void DemSystem::compute_forces(Real dt) {
   // that worker's own (empty) instance: bind the calling thread's instances to references first.
   static thread_local std::vector<PairOut> pout_tl;
   static thread_local std::vector<std::vector<HistEntry>> whist_tl;
+  static thread_local std::vector<std::vector<std::pair<std::uint32_t, Vec3>>> wload_tl;
   static thread_local std::vector<HistEntry> all_tl;
   std::vector<PairOut>& pout = pout_tl;
   std::vector<std::vector<HistEntry>>& whist = whist_tl;
+  // Per body: (wall, the force of that wall's contacts on the body), for the walls it touches.
+  std::vector<std::vector<std::pair<std::uint32_t, Vec3>>>& wload = wload_tl;
   std::vector<HistEntry>& all = all_tl;
   pout.resize(static_cast<std::size_t>(np));
 
@@ -661,12 +668,14 @@ void DemSystem::compute_forces(Real dt) {
 
   // ---- per-body gather: walls, then the body's pairs in pair order ----
   whist.resize(n);
+  wload.resize(n);
   std::vector<Real> wmax(n, Real(0));
   run_each(Index(n), [&](Index ii) {
     const std::size_t i = std::size_t(ii);
     const RigidBody& b = eval_[i];
     Load load;
     whist[i].clear();
+    wload[i].clear();
     if (b.motion == Motion::kFree) {
       const GrainTemplate& t = *templates_[std::size_t(b.shape)];
       PairLaw base;
@@ -682,6 +691,12 @@ void DemSystem::compute_forces(Real dt) {
         }
         const PairLaw law = wall_law(base, wall);
         const GlobalId wkey = kWallKeyBit | GlobalId(w);
+        const Vec3 f_before = load.f;
+        // Records this wall's share of the body's load (the reaction on the wall is its negative).
+        auto note_wall = [&]() {
+          const Vec3 d = load.f - f_before;
+          if (d.x != 0 || d.y != 0 || d.z != 0) wload[i].push_back({std::uint32_t(w), d});
+        };
         if (t.is_sphere()) {
           const Real d = t.radius() - phc;
           if (!(d > 0)) continue;
@@ -694,6 +709,7 @@ void DemSystem::compute_forces(Real dt) {
           load.add(contact_force(law, d, nrm, v_rel, dt, s, nullptr), xc, b.x);
           wmax[i] = std::max(wmax[i], d);
           whist[i].push_back({key, s});
+          note_wall();
           continue;
         }
         const std::size_t nn = t.nodes().size();
@@ -712,6 +728,7 @@ void DemSystem::compute_forces(Real dt) {
           wmax[i] = std::max(wmax[i], -ph);
           whist[i].push_back({key, s});
         }
+        note_wall();
       }
     }
     for (std::uint32_t e = by_body_off_[i]; e < by_body_off_[i + 1]; ++e) {
@@ -734,9 +751,11 @@ void DemSystem::compute_forces(Real dt) {
     phi_lookups_ += p.lookups;
     node_list_builds_ += p.builds;
   }
+  for (Vec3& f : wall_force_) f = Vec3();
   for (std::size_t i = 0; i < n; ++i) {
     all.insert(all.end(), whist[i].begin(), whist[i].end());
     max_overlap_ = std::max(max_overlap_, wmax[i]);
+    for (const auto& [w, f] : wload[i]) wall_force_[w] -= f;  // fixed order: bodies, then walls
   }
   std::sort(all.begin(), all.end(),
             [](const HistEntry& x, const HistEntry& y) { return x.key < y.key; });
@@ -750,6 +769,8 @@ void DemSystem::compute_forces(Real dt) {
 
 void DemSystem::step(Real dt) {
   compute_forces(dt);
+  for (std::size_t w = 0; w < walls_.size(); ++w) wall_impulse_[w] += dt * wall_force_[w];
+  wall_impulse_time_ += dt;
   const Vec3 g = params_.gravity;
   run_each(Index(bodies_.size()), [&](Index i) {
     const std::size_t k = std::size_t(i);
@@ -781,7 +802,19 @@ DemState DemSystem::state() const {
   s.ext_torque = ext_torque_;
   s.pairs_built_at = pairs_built_at_;
   for (Motion m : pairs_built_motion_) s.pairs_built_motion.push_back(std::int32_t(m));
+  s.wall_impulse = wall_impulse_;
+  s.wall_impulse_time = wall_impulse_time_;
   return s;
+}
+
+Vec3 DemSystem::wall_mean_force(int w) const {
+  const Vec3& j = wall_impulse_.at(std::size_t(w));
+  return wall_impulse_time_ > 0 ? j / wall_impulse_time_ : Vec3();
+}
+
+void DemSystem::reset_wall_impulse() {
+  for (Vec3& j : wall_impulse_) j = Vec3();
+  wall_impulse_time_ = 0;
 }
 
 void DemSystem::restore(const DemState& s) {
@@ -811,6 +844,11 @@ void DemSystem::restore(const DemState& s) {
     if (n != 0 && n != bodies_.size())
       throw InputError("DEM state: an array of " + std::to_string(n) + " entries for " +
                        std::to_string(bodies_.size()) + " bodies");
+  if (!s.wall_impulse.empty() && s.wall_impulse.size() != walls_.size())
+    throw InputError("DEM state: " + std::to_string(s.wall_impulse.size()) + " wall impulses for " +
+                     std::to_string(walls_.size()) + " walls");
+  wall_impulse_ = s.wall_impulse.empty() ? std::vector<Vec3>(walls_.size()) : s.wall_impulse;
+  wall_impulse_time_ = s.wall_impulse.empty() ? Real(0) : s.wall_impulse_time;
   const bool kept = !s.ext_force.empty() && !s.ext_torque.empty();
   ext_force_ = kept ? s.ext_force : std::vector<Vec3>(bodies_.size());
   ext_torque_ = kept ? s.ext_torque : std::vector<Vec3>(bodies_.size());

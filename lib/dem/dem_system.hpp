@@ -111,6 +111,11 @@ struct DemState {
   // then rebuilt from the restored positions.
   std::vector<Vec3> pairs_built_at;
   std::vector<std::int32_t> pairs_built_motion;
+  // The walls' contact impulses since DemSystem::reset_wall_impulse and the time they span (a
+  // restart reports the same mean wall force as the run it continues). Empty in checkpoints
+  // written before 2026-12-06: restored as zero.
+  std::vector<Vec3> wall_impulse;
+  Real wall_impulse_time = 0;
 };
 
 class DemSystem {
@@ -152,6 +157,13 @@ class DemSystem {
   // against a grain and a wall (Hertz: the Hertz contact time at reference_speed).
   Real time_step() const;
 
+  // The grains' contact force ON wall w (minus the sum of its contacts' forces on the grains) at
+  // the last compute_forces: a barrier wall's load from boulders [N].
+  const Vec3& wall_force(int w) const { return wall_force_.at(std::size_t(w)); }
+  // The time mean of wall_force over the steps since reset_wall_impulse() (zero before a step):
+  // a coupled run resets it at each fluid step, so it is the load over that step's sub-steps.
+  Vec3 wall_mean_force(int w) const;
+  void reset_wall_impulse();
   const Vec3& force(std::size_t body) const { return force_[body]; }    // contacts only
   const Vec3& torque(std::size_t body) const { return torque_[body]; }  // contacts only
   Real time() const { return time_; }
@@ -210,6 +222,8 @@ class DemSystem {
   std::vector<Wall> walls_;
   std::vector<RigidBody> eval_;  // bodies with velocities predicted to the force time
   std::vector<Vec3> force_, torque_, ext_force_, ext_torque_;
+  std::vector<Vec3> wall_force_, wall_impulse_;  // per wall (wall_force, wall_mean_force)
+  Real wall_impulse_time_ = 0;
   std::vector<Vec3> acc_prev_, alpha_prev_;  // last step's dv/dt (world) and dw/dt (body)
   std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs_;
   std::vector<Vec3> pairs_built_at_;        // centroids at the last pair build

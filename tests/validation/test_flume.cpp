@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "app/simulation.hpp"
+#include "core/error.hpp"
 #include "io/checkpoint.hpp"
 #include "io/scene_yaml.hpp"
 #include "validation/run_files.hpp"
@@ -46,8 +47,9 @@ Csv read_csv(const std::string& path) {
   return c;
 }
 
-RunResult run(const Scene& scene, const std::string& out, std::int64_t max_steps = -1) {
-  return runfiles::run_host(scene, out, max_steps);
+RunResult run(const Scene& scene, const std::string& out, std::int64_t max_steps = -1,
+              const std::string& restart = "") {
+  return runfiles::run_host(scene, out, max_steps, restart);
 }
 
 // Still water held by a closed barrier: three walls, each as wide as the pitch, close a channel
@@ -180,6 +182,78 @@ TEST(Flume, ImpactForceCsvSumsTheWalls) {
     EXPECT_GE(row[std::size_t(totf)], std::abs(s) - 1e-9);
   }
   EXPECT_GT(c.rows.back()[std::size_t(tot)], 0.5 * 7.358);  // the water pushes downstream
+}
+
+// A boulder's load on a barrier wall (impact_force.csv's grain columns): a 16 mm bead of 2500
+// kg/m^3 set on the top face of the middle wall of the closed barrier above, in the dry (the
+// water is 0.1 m deep, the wall 0.15 m high). Once it has settled (a few contact times: t_c =
+// 2.3 ms) the middle wall carries its weight m g = 0.0526 N straight down, the other walls
+// nothing, and the fluid columns are the water's alone, as before.
+TEST(Flume, BoulderOnABarrierWallLoadsItWithItsWeight) {
+  std::string yaml = closed_barrier_yaml(0.0125);
+  yaml += R"(dem:
+  grain_grain: {kn: 1e4, restitution: 0.5, friction: 0.3}
+  grain_wall: {kn: 1e4, restitution: 0.5, friction: 0.3}
+  shapes:
+    - {name: bead, type: sphere, diameter: 0.016}
+  bodies:
+    - {shape: bead, density: 2500, position: [0.11875, 0.075, 0.158]}
+  walls:
+    - {solid: channel}
+    - {solid: barrier_1}
+    - {solid: barrier_2}
+    - {solid: barrier_3}
+)";
+  const Scene scene = parse_scene(yaml, "closed_barrier_bead.yaml",
+                                  {"time.end=0.06", "checkpoint={every_steps: 100, keep: 5}"});
+  const RunResult r = run(scene, "flume_bead");
+  ASSERT_FALSE(r.unstable) << r.failure;
+  // Through a restart at step 100 (the bead settling): the same file, row for row.
+  run(scene, "flume_bead_split", 100);
+  const RunResult rs = run(scene, "flume_bead_split", -1, checkpoint_path("flume_bead_split", 100));
+  ASSERT_FALSE(rs.unstable) << rs.failure;
+  EXPECT_EQ(runfiles::slurp("flume_bead_split/impact_force.csv"),
+            runfiles::slurp("flume_bead/impact_force.csv"));
+  // A series written by an earlier sphdem (without the grains' columns) is not continued with
+  // rows of another width: the restart stops and names the file.
+  {
+    std::string text = runfiles::slurp("flume_bead_split/impact_force.csv");
+    const std::size_t cut = text.find(",barrier_1_grain_fx");
+    ASSERT_NE(cut, std::string::npos);
+    text.erase(cut, text.find('\n') - cut);
+    std::ofstream("flume_bead_split/impact_force.csv") << text;
+    try {
+      run(scene, "flume_bead_split", -1, checkpoint_path("flume_bead_split", 100));
+      ADD_FAILURE() << "a restart appended to a file with other columns";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("impact_force.csv: its columns"), std::string::npos)
+          << e.what();
+    }
+  }
+  const Csv c = read_csv("flume_bead/impact_force.csv");
+  // The fluid's columns first, as without grains, then the grains'.
+  ASSERT_EQ(c.header.size(), 1u + 2 * 3 + 2 + 2 * 3 + 2);
+  EXPECT_EQ(c.header[8], "total_f");
+  EXPECT_EQ(c.header[9], "barrier_1_grain_fx");
+  const int g2 = c.col("barrier_2_grain_f"), g2x = c.col("barrier_2_grain_fx");
+  const int g1 = c.col("barrier_1_grain_f"), g3 = c.col("barrier_3_grain_f");
+  const int gt = c.col("total_grain_f"), gtx = c.col("total_grain_fx");
+  ASSERT_TRUE(g2 > 0 && g2x > 0 && g1 > 0 && g3 > 0 && gt > 0 && gtx > 0);
+  const double weight = 2500 * (4.0 / 3.0) * kPi * std::pow(0.008, 3) * 9.81;
+  int rows = 0;
+  for (const auto& row : c.rows) {
+    EXPECT_EQ(row[std::size_t(g1)], 0.0);
+    EXPECT_EQ(row[std::size_t(g3)], 0.0);
+    EXPECT_NEAR(row[std::size_t(gt)], row[std::size_t(g2)], 1e-12);
+    EXPECT_NEAR(row[std::size_t(gtx)], row[std::size_t(g2x)], 1e-12);
+    if (row[0] < 0.04) continue;
+    ++rows;
+    EXPECT_NEAR(row[std::size_t(g2)], weight, 0.01 * weight) << "t = " << row[0];
+    EXPECT_LT(std::abs(row[std::size_t(g2x)]), 0.01 * weight) << "t = " << row[0];
+  }
+  EXPECT_GE(rows, 3);
+  std::printf("bead on the middle wall: %.5f N at t = %.3f s (weight %.5f N)\n",
+              c.rows.back()[std::size_t(g2)], c.rows.back()[0], weight);
 }
 
 // The shipped flume (coarsened to dp = 0.01 for a few steps): the outputs a barrier study reads

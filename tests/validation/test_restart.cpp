@@ -5,6 +5,7 @@
 
 #include <csignal>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -259,8 +260,15 @@ TEST(Restart, GrainsInContactContinueBitIdentically) {
   dem::DemSystem resumed = grains_in_contact();
   resumed.restore(back.dem);
   EXPECT_EQ(resumed.time(), first.time());
+  // The floor's load (accumulated since the start: never reset here) comes back bit for bit,
+  // and goes on as in the straight run.
+  const Vec3 f_first = first.wall_mean_force(0), f_back = resumed.wall_mean_force(0);
+  ASSERT_GT(norm(f_first), 0);
+  EXPECT_EQ(std::memcmp(&f_first, &f_back, sizeof(Vec3)), 0);
   for (int i = 0; i < half; ++i) resumed.step(dt);
   EXPECT_EQ(body_state(resumed), body_state(straight));
+  const Vec3 f_straight = straight.wall_mean_force(0), f_resumed = resumed.wall_mean_force(0);
+  EXPECT_EQ(std::memcmp(&f_straight, &f_resumed, sizeof(Vec3)), 0);
 
   // Control: the same restart without the contact history ends elsewhere.
   dem::DemState no_history = back.dem;
