@@ -134,7 +134,24 @@ def summarize(run_dir, until=float("inf")):
     s_mid, s_tot = running_mean(t, f_mid, 0.05), running_mean(t, f_tot, 0.05)
     ks = max(range(len(rows)), key=lambda i: s_mid[i]) if rows else 0
     # Static force: mean over the last 10 % of the run.
-    tail = [f for ti, f in zip(t, f_mid) if ti >= t[-1] - 0.1 * (t[-1] - t[0])] if rows else []
+    def static(f):
+        tail = [v for ti, v in zip(t, f) if ti >= t[-1] - 0.1 * (t[-1] - t[0])] if rows else []
+        return sum(tail) / len(tail) if tail else 0.0
+    # The boulders' contact force on the walls (columns of runs with grains on DEM barrier walls).
+    nan = float("nan")
+    g_mid_col = "barrier_%d_grain_fx" % ((walls + 1) // 2)
+    grains = {"peak_grain_mid_50ms": nan, "static_grain_mid": nan, "static_grain_total": nan,
+              "peak_mid_with_grains_50ms": nan, "static_mid_with_grains": nan}
+    g_series = None
+    if g_mid_col in h and rows:
+        g_mid = [r[h.index(g_mid_col)] for r in rows]
+        g_tot = [r[h.index("total_grain_fx")] for r in rows]
+        both = [a + b for a, b in zip(f_mid, g_mid)]
+        g_series = (t, running_mean(t, g_mid, 0.05))
+        grains = {"peak_grain_mid_50ms": max(g_series[1]), "static_grain_mid": static(g_mid),
+                  "static_grain_total": static(g_tot),
+                  "peak_mid_with_grains_50ms": max(running_mean(t, both, 0.05)),
+                  "static_mid_with_grains": static(both)}
     _, ru = read_csv(os.path.join(run_dir, "runup.csv"))
     ru = [r for r in ru if r[0] <= until]
     trap = os.path.join(run_dir, "trap.csv")
@@ -178,11 +195,14 @@ def summarize(run_dir, until=float("inf")):
         "peak_mid_50ms": s_mid[ks] if rows else 0.0,
         "t_peak_50ms": t[ks] if rows else 0.0,
         "peak_total_50ms": max(s_tot, default=0.0),
-        "static_force_mid": sum(tail) / len(tail) if tail else 0.0,
+        "static_force_mid": static(f_mid),
+        "static_total": static(f_tot),
+        **grains,
         "max_runup": max((r[1] for r in ru), default=0.0),
         "trap_ratio": up / (up + down) if up + down > 0 else float("nan"),
         "series": (t, f_mid),
         "smooth": (t, s_mid),
+        "grain_smooth": g_series,
     }
 
 
@@ -251,8 +271,9 @@ def main():
         r["finished"] = finished(run_dir)
         results.append(r)
     cols = ["preset", "opening_ratio", "peak_force_mid", "t_peak", "peak_mid_50ms", "t_peak_50ms",
-            "peak_total_50ms", "static_force_mid",
-            "max_runup", "trap_ratio", "grains_upstream", "grains_downstream", "front_speed",
+            "peak_total_50ms", "static_force_mid", "static_total", "peak_grain_mid_50ms",
+            "static_grain_mid", "static_grain_total", "peak_mid_with_grains_50ms",
+            "static_mid_with_grains", "max_runup", "trap_ratio", "grains_upstream", "grains_downstream", "front_speed",
             "t_end", "steps", "wall_s", "finished"]
     write_table(os.path.join(a.out, "summary"), cols, results)
     try:
@@ -266,8 +287,12 @@ def main():
     for r in results:
         line, = ax.plot(*r["smooth"], label="%s (opening %.3f)" % (r["preset"], r["opening_ratio"]))
         ax.plot(*r["series"], color=line.get_color(), alpha=0.25, linewidth=0.7)
+        if r["grain_smooth"]:
+            ax.plot(*r["grain_smooth"], color=line.get_color(), linestyle="--", linewidth=1,
+                    label="%s: boulders' contact force" % r["preset"])
     ax.set_xlabel("t (s)")
-    ax.set_ylabel("force on the middle wall along the channel (N)\n(0.05 s running mean; samples faint)")
+    ax.set_ylabel("force on the middle wall along the channel (N)\n(fluid: 0.05 s running mean, "
+                  "samples faint;\nboulders' contacts dashed, 0.05 s running mean)")
     ax.legend()
     fig.tight_layout()
     fig.savefig(os.path.join(a.out, "force.png"), dpi=120)
