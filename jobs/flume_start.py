@@ -46,7 +46,8 @@ def rows(path):
 
 def analyse(run_dir, t0, barrier_x=0.6, thickness=0.013):
     force = rows(os.path.join(run_dir, "impact_force.csv"))
-    walls = sum(1 for c in force[0] if c.startswith("barrier_") and c.endswith("_fx"))
+    walls = sum(1 for c in force[0]
+                if c.startswith("barrier_") and c.endswith("_fx") and "_grain_" not in c)
     mid = "barrier_%d_fx" % ((walls + 1) // 2)
     front = rows(os.path.join(run_dir, "front.csv"))
     runup = rows(os.path.join(run_dir, "runup.csv"))

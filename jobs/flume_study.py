@@ -123,7 +123,8 @@ def summarize(run_dir, until=float("inf")):
     """Numbers of one case from its CSV files (rows up to t = until)."""
     h, rows = read_csv(os.path.join(run_dir, "impact_force.csv"))
     rows = [r for r in rows if r[0] <= until]
-    walls = sum(1 for c in h if c.endswith("_fx") and c.startswith("barrier_"))
+    walls = sum(1 for c in h
+                if c.endswith("_fx") and c.startswith("barrier_") and "_grain_" not in c)
     mid = h.index("barrier_%d_fx" % ((walls + 1) // 2))
     t = [r[0] for r in rows]
     f_mid = [r[mid] for r in rows]
