@@ -15,7 +15,8 @@ largest run-up, the trap ratio, the boulders upstream and downstream at the end,
 front speed (over 0.05 s windows of front.csv), and the run's steps and wall time
 (summary.json), and draws OUT/force.png (middle-wall force against time, every case on one
 axis), OUT/profiles.png (centreline surface at the profile time) and, for cases with grains,
-OUT/boulders.png (each boulder's position along the channel against time).
+OUT/boulders.png (each boulder's position along the channel against time) and
+OUT/barrier_loads.png (the fluid's and the boulders' contact force on all barrier walls).
 
   python3 jobs/flume_study.py --out runs/flume_study [--study arrangement]
       [--presets P00 P30 P45 V30 V45] [--sphdem build/sphdem]
@@ -142,15 +143,18 @@ def summarize(run_dir, until=float("inf")):
     nan = float("nan")
     g_mid_col = "barrier_%d_grain_fx" % ((walls + 1) // 2)
     grains = {"peak_grain_mid_50ms": nan, "static_grain_mid": nan, "static_grain_total": nan,
-              "peak_mid_with_grains_50ms": nan, "static_mid_with_grains": nan}
-    g_series = None
+              "peak_grain_total_50ms": nan, "peak_mid_with_grains_50ms": nan,
+              "static_mid_with_grains": nan}
+    g_series = g_tot_series = None
     if g_mid_col in h and rows:
         g_mid = [r[h.index(g_mid_col)] for r in rows]
         g_tot = [r[h.index("total_grain_fx")] for r in rows]
         both = [a + b for a, b in zip(f_mid, g_mid)]
         g_series = (t, running_mean(t, g_mid, 0.05))
+        g_tot_series = (t, running_mean(t, g_tot, 0.05))
         grains = {"peak_grain_mid_50ms": max(g_series[1]), "static_grain_mid": static(g_mid),
                   "static_grain_total": static(g_tot),
+                  "peak_grain_total_50ms": max(g_tot_series[1]),
                   "peak_mid_with_grains_50ms": max(running_mean(t, both, 0.05)),
                   "static_mid_with_grains": static(both)}
     _, ru = read_csv(os.path.join(run_dir, "runup.csv"))
@@ -204,6 +208,8 @@ def summarize(run_dir, until=float("inf")):
         "series": (t, f_mid),
         "smooth": (t, s_mid),
         "grain_smooth": g_series,
+        "total_smooth": (t, s_tot),
+        "grain_total_smooth": g_tot_series,
     }
 
 
@@ -273,9 +279,10 @@ def main():
         results.append(r)
     cols = ["preset", "opening_ratio", "peak_force_mid", "t_peak", "peak_mid_50ms", "t_peak_50ms",
             "peak_total_50ms", "static_force_mid", "static_total", "peak_grain_mid_50ms",
-            "static_grain_mid", "static_grain_total", "peak_mid_with_grains_50ms",
-            "static_mid_with_grains", "max_runup", "trap_ratio", "grains_upstream", "grains_downstream", "front_speed",
-            "t_end", "steps", "wall_s", "finished"]
+            "static_grain_mid", "static_grain_total", "peak_grain_total_50ms",
+            "peak_mid_with_grains_50ms", "static_mid_with_grains", "max_runup", "trap_ratio",
+            "grains_upstream", "grains_downstream", "front_speed", "t_end", "steps", "wall_s",
+            "finished"]
     write_table(os.path.join(a.out, "summary"), cols, results)
     try:
         import matplotlib
@@ -297,6 +304,19 @@ def main():
     ax.legend()
     fig.tight_layout()
     fig.savefig(os.path.join(a.out, "force.png"), dpi=120)
+    # The whole barrier: the fluid's force on all walls and the boulders' contacts on all walls.
+    with_loads = [r for r in results if r["grain_total_smooth"]]
+    if with_loads:
+        fig, ax = plt.subplots(figsize=(7, 4))
+        for r in with_loads:
+            line, = ax.plot(*r["total_smooth"], label="%s: fluid" % r["preset"])
+            ax.plot(*r["grain_total_smooth"], color=line.get_color(), linestyle="--",
+                    label="%s: boulders' contacts" % r["preset"])
+        ax.set_xlabel("t (s)")
+        ax.set_ylabel("force on all barrier walls along the channel (N)\n(0.05 s running mean)")
+        ax.legend()
+        fig.tight_layout()
+        fig.savefig(os.path.join(a.out, "barrier_loads.png"), dpi=120)
     fig, ax = plt.subplots(figsize=(7, 4))
     for r in results:
         path = os.path.join(a.out, r["preset"], "runup_profile.csv")
