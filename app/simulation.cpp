@@ -635,13 +635,25 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
     *bodies_csv << std::setprecision(10);
     if (!restarting) *bodies_csv << "t,id,x,y,z,vx,vy,vz,wx,wy,wz,fx,fy,fz,tx,ty,tz\n";
   }
+  // The grains' contact load on each scene solid (by body index; zero for a solid that is no
+  // DEM wall): the mean over the last fluid step (DemSystem::wall_mean_force).
+  auto solid_grain_force = [&]() {
+    std::vector<Vec3> f(scene.solids.size());
+    if (coupling)
+      for (std::size_t j = 0; j < dem.wall_solid.size(); ++j)
+        for (std::size_t s = 0; s < scene.solids.size(); ++s)
+          if (scene.solids[s].name == dem.wall_solid[j]->name)
+            f[s] += dem.system->wall_mean_force(dem.wall_index[j]);
+    return f;
+  };
   auto write_diagnostics = [&]() {
     if (coupling && scene.barrier.enabled) {  // the grains' load on each barrier wall
+      const std::vector<Vec3> by_solid = solid_grain_force();
       std::vector<Vec3> f(std::size_t(std::max(scene.barrier.walls, 0)));
-      for (std::size_t j = 0; j < dem.wall_solid.size(); ++j)
+      for (std::size_t s = 0; s < scene.solids.size(); ++s)
         for (int k = 1; k <= scene.barrier.walls; ++k)
-          if (dem.wall_solid[j]->name == "barrier_" + std::to_string(k))
-            f[std::size_t(k - 1)] += dem.system->wall_mean_force(dem.wall_index[j]);
+          if (scene.solids[s].name == "barrier_" + std::to_string(k))
+            f[std::size_t(k - 1)] += by_solid[s];
       diag.set_barrier_grain_force(std::move(f));
     }
     if (bodies_csv) {  // each grain's state and the fluid's force and torque on it
@@ -778,7 +790,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
         }
         if (insitu->due(solver->step_count()))  // in situ (see above)
           with_share([&](const ParticleSet<Host>& sh) {
-            insitu->execute(solver->step_count(), solver->time(), sh, p);
+            insitu->execute(solver->step_count(), solver->time(), sh, p, solid_grain_force());
           });
       });
       if (coupling)  // the grain boundary particles take the grains' poses at t^n

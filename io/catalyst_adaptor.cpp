@@ -19,6 +19,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <stdexcept>
+#include <string>
+#include <vector>
 
 #include "core/error.hpp"
 #include "io/insitu.hpp"
@@ -108,8 +110,11 @@ class CatalystAdaptor final : public InSituAdaptor {
 
   bool due(std::int64_t step) const override { return step % scene_.insitu.every_steps == 0; }
 
-  void execute(std::int64_t step, Real time, const ParticleSet<Host>& ps,
-               const StepParams& p) override {
+  void execute(std::int64_t step, Real time, const ParticleSet<Host>& ps, const StepParams& p,
+               const std::vector<Vec3>& grain_force) override {
+    if (grain_force.size() != scene_.solids.size())
+      throw std::logic_error("insitu: grain_force has " + std::to_string(grain_force.size()) +
+                             " entries for " + std::to_string(scene_.solids.size()) + " solids");
     const auto t0 = std::chrono::steady_clock::now();
     vtkNew<vtkCPDataDescription> dd;
     dd->AddInput("fluid");
@@ -152,6 +157,14 @@ class CatalystAdaptor final : public InSituAdaptor {
         }
         d->AddArray(force);
         d->AddArray(body);
+        // The grains' contact load on each solid (field data: one tuple per solid).
+        auto grains = vtkSmartPointer<RealArray>::New();
+        grains->SetName("grain_force");
+        grains->SetNumberOfComponents(3);
+        grains->SetNumberOfTuples(vtkIdType(grain_force.size()));
+        for (std::size_t s = 0; s < grain_force.size(); ++s)
+          grains->SetTypedTuple(vtkIdType(s), &grain_force[s].x);
+        pd->GetFieldData()->AddArray(grains);
         in_walls->SetGrid(pd);
       }
       if (!processor_->CoProcess(dd))

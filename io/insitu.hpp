@@ -8,7 +8,10 @@
 //   "fluid"  the fluid particles: points with vel, rho, press, id
 //   "walls"  the boundary particles: points with force (mass * acc, N: the fluid's force on that
 //            particle), body (index into the scene's solids), normal, press, id; field data
-//            solid_names (one per solid, by body index)
+//            solid_names (one per solid, by body index) and grain_force (one 3-vector per solid,
+//            by body index, N: the grains' DEM contact load on that solid, the mean over the
+//            last fluid step as in impact_force.csv's grain columns; zero for a solid that is no
+//            DEM wall, and everywhere in a run without grains)
 //   both carry field data: time, step, dp, h, dim.
 // The adaptor owns its library state and releases it in its destructor, so it must be destroyed
 // before MPI_Finalize (run_scene's adaptor is a local of run_scene).
@@ -17,6 +20,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "scene/scene.hpp"
 #include "solver/particles.hpp"
@@ -29,10 +33,11 @@ class InSituAdaptor {
   virtual ~InSituAdaptor() = default;
   // True when `step` is an extract step (the scene's insitu.every_steps; step 0 included).
   virtual bool due(std::int64_t step) const = 0;
-  // Hands the particles at (time, step) to the analysis. Throws std::runtime_error when the
-  // analysis fails (a broken script).
+  // Hands the particles at (time, step) to the analysis, with the grains' contact load on each
+  // solid (`grain_force`, by body index: one per scene solid). Throws std::runtime_error when
+  // the analysis fails (a broken script).
   virtual void execute(std::int64_t step, Real time, const ParticleSet<Host>& ps,
-                       const StepParams& p) = 0;
+                       const StepParams& p, const std::vector<Vec3>& grain_force) = 0;
   // Extract steps so far and the wall seconds spent in execute() (building the VTK data and
   // running the scripts).
   virtual std::int64_t executed() const = 0;
@@ -44,7 +49,8 @@ class InSituAdaptor {
 class NullInSituAdaptor final : public InSituAdaptor {
  public:
   bool due(std::int64_t) const override { return false; }
-  void execute(std::int64_t, Real, const ParticleSet<Host>&, const StepParams&) override {}
+  void execute(std::int64_t, Real, const ParticleSet<Host>&, const StepParams&,
+               const std::vector<Vec3>&) override {}
   std::int64_t executed() const override { return 0; }
   double seconds() const override { return 0; }
   std::string name() const override { return "none"; }

@@ -1,9 +1,12 @@
 # script-version: 2
-# sphdem in-situ extract (ParaView 5.11 legacy Catalyst): the fluid's force on each named solid.
+# sphdem in-situ extract (ParaView 5.11 legacy Catalyst): the fluid's force on each named solid,
+# and the boulders' contact load on it.
 # Writes one table per extract step, catalyst/impact_force_<step>.csv, with one row per solid:
-#   solid, fx, fy, fz (N; the force per unit width in 2D, as impact_force-style CSVs), t, step.
+#   solid, fx, fy, fz (N; the fluid's force, per unit width in 2D, as impact_force-style CSVs),
+#   t, step, grain_fx, grain_fy, grain_fz (N; the grains' DEM contact load on the solid, the
+#   mean over the last fluid step as impact_force.csv's barrier_k_grain_fx; 0 without grains).
 # Input channel "walls" (io/insitu.hpp): the boundary particles with point arrays force
-# (mass * acc) and body (solid index), and field data solid_names, time, step.
+# (mass * acc) and body (solid index), and field data solid_names, grain_force, time, step.
 # The sum runs over the particles in order (cumsum), like the solver's probe_solid_force, so the
 # values equal the solver's force diagnostics (diagnostics.forces) at the same step.
 from paraview.simple import *
@@ -22,11 +25,17 @@ fd = data.GetFieldData()
 names = fd.GetAbstractArray('solid_names')
 force = np.asarray(inputs[0].PointData['force'], dtype=np.float64).reshape(-1, 3)
 body = np.asarray(inputs[0].PointData['body'])
+grain_array = fd.GetArray('grain_force')
+if grain_array is None or grain_array.GetNumberOfTuples() != names.GetNumberOfValues():
+    raise RuntimeError("impact_force.py: the walls channel has no grain_force field data with "
+                       "one tuple per solid (an sphdem older than this script?)")
+grains = [grain_array.GetTuple3(s) for s in range(names.GetNumberOfValues())]
 table = self.GetOutput()
 cols = {}
 solid = vtkStringArray()
 solid.SetName('solid')
-for c in ('fx', 'fy', 'fz', 't', 'step'):
+COLUMNS = ('fx', 'fy', 'fz', 't', 'step', 'grain_fx', 'grain_fy', 'grain_fz')
+for c in COLUMNS:
     cols[c] = vtkDoubleArray()
     cols[c].SetName(c)
 for s in range(names.GetNumberOfValues()):
@@ -37,8 +46,10 @@ for s in range(names.GetNumberOfValues()):
         cols[c].InsertNextValue(total[k])
     cols['t'].InsertNextValue(fd.GetArray('time').GetTuple1(0))
     cols['step'].InsertNextValue(fd.GetArray('step').GetTuple1(0))
+    for k, c in enumerate(('grain_fx', 'grain_fy', 'grain_fz')):
+        cols[c].InsertNextValue(grains[s][k])
 table.AddColumn(solid)
-for c in ('fx', 'fy', 'fz', 't', 'step'):
+for c in COLUMNS:
     table.AddColumn(cols[c])
 '''
 

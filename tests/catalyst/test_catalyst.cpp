@@ -90,7 +90,7 @@ void check_impact_force() {
     const auto rows = csv_rows(step_file(kDir, "impact_force", step, ".csv"));
     ASSERT_EQ(rows.size(), 2u) << "step " << step;
     for (const auto& r : rows) {
-      ASSERT_EQ(r.size(), 6u);
+      ASSERT_EQ(r.size(), 9u);
       const std::string what = r[0] + " at step " + std::to_string(step);
       ASSERT_TRUE(solver.count(r[0])) << what;
       const auto& s = solver[r[0]][std::size_t(step)];
@@ -98,6 +98,8 @@ void check_impact_force() {
       expect_same(std::stod(r[4]), std::stod(s[0]), what + ": t");
       for (int k = 0; k < 3; ++k)
         expect_same(std::stod(r[1 + k]), std::stod(s[1 + k]), what + ": f" + "xyz"[k]);
+      for (int k = 0; k < 3; ++k)  // no grains: no contact load
+        EXPECT_EQ(std::stod(r[6 + k]), 0.0) << what + ": grain_f" + "xyz"[k];
       if (r[0] == "barrier") barrier_fx_last = std::stod(r[1]);
     }
   }
@@ -185,6 +187,61 @@ TEST(Catalyst, DamBreakExtractsMatchTheSolver) {
     SCOPED_TRACE("decimated particles");
     check_particles();
   }
+}
+
+// Boulders (tests/data/scenes/catalyst_boulders.yaml): the extract's grain columns are the
+// grains' contact load on each solid, the same numbers as impact_force.csv's barrier_k_grain_fx
+// and _f, and at rest one bead's weight on barrier_2 and one on the channel floor.
+TEST(Catalyst, BoulderLoadsReachTheExtract) {
+  const std::string out = "catalyst_boulders", dir = out + "/catalyst";
+  fs::remove_all(out);
+  const std::string scene =
+      std::string(SPHDEM_SOURCE_DIR) + "/tests/data/scenes/catalyst_boulders.yaml";
+  ASSERT_EQ(sh(std::string(SPHDEM_BINARY) + " run " + scene + " --out " + out + " --quiet > " +
+               out + ".log 2>&1"),
+            0)
+      << slurp(out + ".log");
+  // impact_force.csv: t, barrier_k_fx, barrier_k_f (k = 1..3), total_fx, total_f, then the same
+  // for the grains; one row per step (diagnostics.every < dt), row i = the state after step i.
+  const auto solver = csv_rows(out + "/impact_force.csv");
+  ASSERT_GT(solver.size(), 200u);
+  ASSERT_EQ(solver[0].size(), 17u);
+  const double weight = 2500 * (4.0 / 3.0) * M_PI * std::pow(0.008, 3) * 9.81;
+  int files = 0, settled = 0;
+  for (int step = 0; step < int(solver.size()); step += 20) {
+    const std::string file = step_file(dir, "impact_force", step, ".csv");
+    if (!fs::exists(file)) continue;
+    ++files;
+    const auto rows = csv_rows(file);
+    ASSERT_EQ(rows.size(), 4u) << file;  // channel, barrier_1 .. barrier_3
+    const auto& s = solver[std::size_t(step)];
+    std::map<std::string, std::vector<double>> g;
+    for (const auto& r : rows) {
+      ASSERT_EQ(r.size(), 9u) << file;
+      const std::string what = r[0] + " at step " + std::to_string(step);
+      expect_same(std::stod(r[4]), std::stod(s[0]), what + ": t");
+      g[r[0]] = {std::stod(r[6]), std::stod(r[7]), std::stod(r[8])};
+      if (r[0] == "channel") continue;
+      const int k = r[0].back() - '1';  // barrier_1 -> 0
+      ASSERT_TRUE(k >= 0 && k < 3) << what;
+      // The fluid's force along x, and the grains' (x and magnitude), as in the solver's row.
+      expect_same(std::stod(r[1]), std::stod(s[std::size_t(1 + 2 * k)]), what + ": fx");
+      expect_same(g[r[0]][0], std::stod(s[std::size_t(9 + 2 * k)]), what + ": grain_fx");
+      expect_same(std::hypot(g[r[0]][0], g[r[0]][1], g[r[0]][2]),
+                  std::stod(s[std::size_t(10 + 2 * k)]), what + ": grain_f");
+    }
+    ASSERT_EQ(g.size(), 4u) << file;
+    for (const char* w : {"barrier_1", "barrier_3"})
+      for (int a = 0; a < 3; ++a) EXPECT_EQ(g[w][std::size_t(a)], 0.0) << w << " step " << step;
+    if (std::stod(s[0]) < 0.04) continue;  // settling (contact time 2.3 ms)
+    ++settled;
+    for (const char* w : {"barrier_2", "channel"}) {
+      EXPECT_NEAR(g[w][2], -weight, 0.01 * weight) << w << " step " << step;
+      EXPECT_LT(std::hypot(g[w][0], g[w][1]), 0.01 * weight) << w << " step " << step;
+    }
+  }
+  EXPECT_GE(files, 10);
+  EXPECT_GE(settled, 5);
 }
 
 TEST(Catalyst, AFailingScriptStopsTheRunWithAMessage) {
