@@ -9,6 +9,9 @@
 # (mass * acc) and body (solid index), and field data solid_names, grain_force, time, step.
 # The sum runs over the particles in order (cumsum), like the solver's probe_solid_force, so the
 # values equal the solver's force diagnostics (diagnostics.forces) at the same step.
+# On many ranks each rank holds the walls it owns: the ranks' sums are added (one AllReduce over
+# ParaView's global controller) and rank 0 alone writes the rows, so the table is the whole
+# force on every solid, as on one rank. grain_force is already whole on every rank.
 from paraview.simple import *
 from paraview import catalyst
 
@@ -19,17 +22,35 @@ forces.OutputDataSetType = 'vtkTable'
 forces.Script = r'''
 import numpy as np
 from vtkmodules.vtkCommonCore import vtkDoubleArray, vtkStringArray
+from vtkmodules.vtkParallelCore import vtkCommunicator, vtkMultiProcessController
 
 data = self.GetInputDataObject(0, 0)
 fd = data.GetFieldData()
 names = fd.GetAbstractArray('solid_names')
-force = np.asarray(inputs[0].PointData['force'], dtype=np.float64).reshape(-1, 3)
-body = np.asarray(inputs[0].PointData['body'])
+if data.GetNumberOfPoints():
+    force = np.asarray(inputs[0].PointData['force'], dtype=np.float64).reshape(-1, 3)
+    body = np.asarray(inputs[0].PointData['body'])
+else:  # a rank that owns no wall particle
+    force, body = np.zeros((0, 3)), np.zeros(0, dtype=np.int64)
 grain_array = fd.GetArray('grain_force')
 if grain_array is None or grain_array.GetNumberOfTuples() != names.GetNumberOfValues():
     raise RuntimeError("impact_force.py: the walls channel has no grain_force field data with "
                        "one tuple per solid (an sphdem older than this script?)")
 grains = [grain_array.GetTuple3(s) for s in range(names.GetNumberOfValues())]
+nsolid = names.GetNumberOfValues()
+mine = vtkDoubleArray()  # this rank's share of each solid's force
+mine.SetNumberOfComponents(3)
+mine.SetNumberOfTuples(nsolid)
+for s in range(nsolid):
+    f = force[body == s]
+    mine.SetTuple3(s, *(np.cumsum(f, axis=0)[-1] if len(f) else np.zeros(3)))
+ctrl = vtkMultiProcessController.GetGlobalController()
+rank = ctrl.GetLocalProcessId() if ctrl else 0
+if ctrl and ctrl.GetNumberOfProcesses() > 1:
+    whole = vtkDoubleArray()
+    ctrl.AllReduce(mine, whole, vtkCommunicator.SUM_OP)
+else:
+    whole = mine
 table = self.GetOutput()
 cols = {}
 solid = vtkStringArray()
@@ -38,9 +59,8 @@ COLUMNS = ('fx', 'fy', 'fz', 't', 'step', 'grain_fx', 'grain_fy', 'grain_fz')
 for c in COLUMNS:
     cols[c] = vtkDoubleArray()
     cols[c].SetName(c)
-for s in range(names.GetNumberOfValues()):
-    f = force[body == s]
-    total = np.cumsum(f, axis=0)[-1] if len(f) else np.zeros(3)
+for s in range(nsolid if rank == 0 else 0):  # the other ranks add no rows
+    total = whole.GetTuple3(s)
     solid.InsertNextValue(names.GetValue(s))
     for k, c in enumerate(('fx', 'fy', 'fz')):
         cols[c].InsertNextValue(total[k])

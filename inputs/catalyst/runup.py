@@ -8,6 +8,9 @@
 # The centreline is the plane y = CENTRELINE_Y (None: the middle of the fluid's y range at that
 # step); in 3D only particles within 2h of it count (in 2D every particle is on it).
 # Input channel "fluid" (io/insitu.hpp): fluid points; field data dp, h, dim, time, step.
+# On many ranks each rank holds its own fluid: the bins are laid from the lowest x over all ranks,
+# the heights and counts are reduced over ParaView's global controller (max and sum), and rank 0
+# alone writes the rows, so the table is the one a single rank writes.
 from paraview.simple import *
 from paraview import catalyst
 
@@ -20,30 +23,58 @@ runup.OutputDataSetType = 'vtkTable'
 runup.Script = r'''
 import numpy as np
 from vtkmodules.vtkCommonCore import vtkDoubleArray
+from vtkmodules.vtkParallelCore import vtkCommunicator, vtkMultiProcessController
+
+ctrl = vtkMultiProcessController.GetGlobalController()
+many = ctrl is not None and ctrl.GetNumberOfProcesses() > 1
+rank = ctrl.GetLocalProcessId() if ctrl else 0
+BIG = 1e300  # stands for +infinity in the reductions
+
+def reduce(values, op):
+    # values (a list of floats), reduced elementwise over the ranks
+    send = vtkDoubleArray()
+    send.SetNumberOfTuples(len(values))
+    for i, v in enumerate(values):
+        send.SetValue(i, v)
+    if not many:
+        return list(values)
+    recv = vtkDoubleArray()
+    ctrl.AllReduce(send, recv, op)
+    return [recv.GetValue(i) for i in range(len(values))]
 
 data = self.GetInputDataObject(0, 0)
 fd = data.GetFieldData()
 get = lambda name: fd.GetArray(name).GetTuple1(0)
 dp, h, dim = get('dp'), get('h'), int(get('dim'))
-pts = np.asarray(inputs[0].Points, dtype=np.float64).reshape(-1, 3)
-if dim == 3 and len(pts):
+if data.GetNumberOfPoints():
+    pts = np.asarray(inputs[0].Points, dtype=np.float64).reshape(-1, 3)
+else:  # a rank that holds no fluid
+    pts = np.zeros((0, 3))
+if dim == 3:
     yc = %r
     if yc is None:
-        yc = 0.5 * (pts[:, 1].min() + pts[:, 1].max())
+        lo_y, neg_hi_y = reduce([pts[:, 1].min() if len(pts) else BIG,
+                                 -pts[:, 1].max() if len(pts) else BIG], vtkCommunicator.MIN_OP)
+        yc = 0.5 * (lo_y - neg_hi_y)
     pts = pts[np.abs(pts[:, 1] - yc) < 2 * h]
 rows = {c: [] for c in ('x', 'z_surface', 'n')}
-if len(pts):
-    x0 = pts[:, 0].min()
+x0 = reduce([pts[:, 0].min() if len(pts) else BIG], vtkCommunicator.MIN_OP)[0]
+if x0 < BIG:  # some rank has fluid on the centreline
     k = np.floor((pts[:, 0] - x0) / dp + 0.5).astype(np.int64)
-    top = np.full(k.max() + 1, -np.inf)
+    nbin = int(reduce([float(k.max() + 1) if len(k) else 0.0], vtkCommunicator.MAX_OP)[0])
+    top = np.full(nbin, -BIG)
     np.maximum.at(top, k, pts[:, 2])
-    n = np.bincount(k)
-    for b in np.nonzero(n)[0]:
+    n = np.bincount(k, minlength=nbin).astype(np.float64)
+    top = np.asarray(reduce(list(top), vtkCommunicator.MAX_OP))
+    n = np.asarray(reduce(list(n), vtkCommunicator.SUM_OP))
+    for b in np.nonzero(n)[0] if rank == 0 else []:  # the other ranks add no rows
         rows['x'].append(x0 + b * dp)
         rows['z_surface'].append(top[b] + dp / 2)
         rows['n'].append(n[b])
 table = self.GetOutput()
-peak = max(rows['z_surface']) if rows['z_surface'] else float('nan')
+# np.max, not max: a ProgrammableFilter's max is numpy_interface.algorithms.max, which reduces
+# over the ranks, and only rank 0 has rows.
+peak = float(np.max(rows['z_surface'])) if rows['z_surface'] else float('nan')
 for c in ('x', 'z_surface', 'n', 't', 'step', 'runup'):
     a = vtkDoubleArray()
     a.SetName(c)

@@ -32,28 +32,56 @@ std::string slurp(const std::string& path) {
   return ss.str();
 }
 
-// CSV rows as strings split on ',' (quotes removed); the header row is skipped.
-std::vector<std::vector<std::string>> csv_rows(const std::string& path) {
+std::vector<std::string> split_csv_line(const std::string& line) {
+  std::vector<std::string> cells;
+  std::stringstream ss(line);
+  std::string c;
+  while (std::getline(ss, c, ',')) {
+    if (c.size() >= 2 && c.front() == '"') c = c.substr(1, c.size() - 2);
+    cells.push_back(c);
+  }
+  return cells;
+}
+
+// CSV rows as strings split on ',' (quotes removed); the header row is skipped. With `columns`,
+// each row holds those columns in that order, found by the header's names (on many ranks
+// ParaView's CSV writer gathers the ranks' tables and orders the columns by name); a missing
+// column is a test failure and an empty cell.
+std::vector<std::vector<std::string>> csv_rows(const std::string& path,
+                                               const std::vector<std::string>& columns = {}) {
   std::vector<std::vector<std::string>> rows;
   std::ifstream f(path);
   std::string line;
+  std::vector<int> at;
   bool header = true;
   while (std::getline(f, line)) {
+    std::vector<std::string> cells = split_csv_line(line);
     if (header) {
       header = false;
+      for (const std::string& c : columns) {
+        int k = -1;
+        for (std::size_t i = 0; i < cells.size(); ++i)
+          if (cells[i] == c) k = int(i);
+        EXPECT_GE(k, 0) << path << ": no column " << c;
+        at.push_back(k);
+      }
       continue;
     }
-    std::vector<std::string> cells;
-    std::stringstream ss(line);
-    std::string c;
-    while (std::getline(ss, c, ',')) {
-      if (c.size() >= 2 && c.front() == '"') c = c.substr(1, c.size() - 2);
-      cells.push_back(c);
+    if (!columns.empty()) {
+      std::vector<std::string> picked;
+      for (int k : at)
+        picked.push_back(k >= 0 && k < int(cells.size()) ? cells[std::size_t(k)] : "");
+      cells = picked;
     }
     rows.push_back(cells);
   }
   return rows;
 }
+
+// The extracts' columns, in the order the scripts write them on one rank.
+const std::vector<std::string> kImpactColumns = {"solid", "fx",       "fy",       "fz",      "t",
+                                                 "step",  "grain_fx", "grain_fy", "grain_fz"};
+const std::vector<std::string> kRunupColumns = {"x", "z_surface", "n", "t", "step", "runup"};
 
 std::string step_file(const std::string& dir, const std::string& stem, int step,
                       const std::string& ext) {
@@ -72,22 +100,40 @@ void expect_same(double catalyst, double solver, const std::string& what) {
 // of the column; extracts every 100 steps, solver force rows every step. One test, one run: ctest
 // runs tests as separate processes, side by side.
 constexpr int kEvery = 100, kSteps = 401, kFluid = 800;
-const std::string kOut = "catalyst_dam_break", kDir = kOut + "/catalyst";
 
-void check_impact_force() {
+// The run's command: `launcher` is empty for one rank, or an mpiexec prefix.
+std::string dam_break_command(const std::string& out, const std::string& launcher) {
+  return launcher + std::string(SPHDEM_BINARY) + " run " + kScene + " --out " + out +
+         " --quiet --max-steps " + std::to_string(kSteps) +
+         " --set sph.dp=0.0073"
+         " --set 'solids=[{name: tank, shape: {type: tank, inner_lo: [0, -0.5, 0],"
+         " inner_hi: [0.584, 0.5, 0.35], thickness: 0.02}}, {name: barrier,"
+         " shape: {type: box, lo: [0.17, -0.5, 0], hi: [0.19, 0.5, 0.04]}}]'"
+         " --set 'fluid_blocks[0].velocity=[1.5, 0, 0]'"
+         " --set 'insitu={scripts: [catalyst/impact_force.py, catalyst/runup.py,"
+         " catalyst/particles.py], every_steps: " +
+         std::to_string(kEvery) +
+         "}'"
+         " --set 'diagnostics={every: 1e-9, energy: false, forces: [{name: tank_force,"
+         " solid: tank}, {name: barrier_force, solid: barrier}]}' > " +
+         out + ".log 2>&1";
+}
+
+void check_impact_force(const std::string& out) {
+  const std::string dir = out + "/catalyst";
   // Solver rows: one per step (diagnostics.every < dt), row i = the state after step i.
   std::map<std::string, std::vector<std::vector<std::string>>> solver = {
-      {"tank", csv_rows(kOut + "/tank_force.csv")},
-      {"barrier", csv_rows(kOut + "/barrier_force.csv")}};
+      {"tank", csv_rows(out + "/tank_force.csv")},
+      {"barrier", csv_rows(out + "/barrier_force.csv")}};
   ASSERT_EQ(solver["tank"].size(), std::size_t(kSteps + 1));
   int files = 0;
-  for (const auto& e : fs::directory_iterator(kDir))
+  for (const auto& e : fs::directory_iterator(dir))
     files += e.path().filename().string().rfind("impact_force_", 0) == 0;
   EXPECT_EQ(files, 5);  // steps 0, 100, ..., 400
-  EXPECT_FALSE(fs::exists(step_file(kDir, "impact_force", 50, ".csv")));
+  EXPECT_FALSE(fs::exists(step_file(dir, "impact_force", 50, ".csv")));
   double barrier_fx_last = 0;
   for (int step = 0; step < kSteps; step += kEvery) {
-    const auto rows = csv_rows(step_file(kDir, "impact_force", step, ".csv"));
+    const auto rows = csv_rows(step_file(dir, "impact_force", step, ".csv"), kImpactColumns);
     ASSERT_EQ(rows.size(), 2u) << "step " << step;
     for (const auto& r : rows) {
       ASSERT_EQ(r.size(), 9u);
@@ -107,9 +153,9 @@ void check_impact_force() {
   EXPECT_GT(barrier_fx_last, 100.0);
 }
 
-void check_runup() {
+void check_runup(const std::string& dir) {
   // Step 0: the column, 0.146 m wide (20 bins of dp) and 0.292 m high, all particles counted.
-  auto rows = csv_rows(step_file(kDir, "runup", 0, ".csv"));
+  auto rows = csv_rows(step_file(dir, "runup", 0, ".csv"), kRunupColumns);
   ASSERT_EQ(rows.size(), 20u);
   double n = 0;
   for (const auto& r : rows) {
@@ -123,7 +169,7 @@ void check_runup() {
   // more than a particle. Its highest point (the run-up column) is still the column's top: at
   // most the free-fall distance g t^2 / 2 = 0.8 mm lower, and at most dp/4 higher (SPH noise; it
   // reads 0.09 mm above 0.292 since the mDBC corner fix, a hair below it before).
-  rows = csv_rows(step_file(kDir, "runup", 400, ".csv"));
+  rows = csv_rows(step_file(dir, "runup", 400, ".csv"), kRunupColumns);
   ASSERT_FALSE(rows.empty());
   double x_max = 0;
   n = 0;
@@ -139,54 +185,69 @@ void check_runup() {
   EXPECT_LT(std::stod(rows[0][5]), 0.292 + 0.25 * 0.0073);
 }
 
-void check_particles() {
+// The decimated cloud: every 4th fluid particle of each rank, one piece per rank.
+void check_particles(const std::string& dir, int ranks) {
   for (int step = 0; step < kSteps; step += kEvery) {
-    const std::string piece = step_file(kDir, "particles", step, "");
-    const std::string f = piece + "/" + fs::path(piece).filename().string() + "_0.vtp";
-    const std::string xml = slurp(f);
-    ASSERT_FALSE(xml.empty()) << f;
-    EXPECT_NE(xml.find("NumberOfPoints=\"" + std::to_string(kFluid / 4) + "\""), std::string::npos)
-        << f;
-    for (const char* a : {"vel", "rho", "press", "id"})
-      EXPECT_NE(xml.find(std::string("Name=\"") + a + "\""), std::string::npos) << f << ": " << a;
+    const std::string piece = step_file(dir, "particles", step, "");
+    int points = 0;
+    for (int r = 0; r < ranks; ++r) {
+      const std::string f =
+          piece + "/" + fs::path(piece).filename().string() + "_" + std::to_string(r) + ".vtp";
+      const std::string xml = slurp(f);
+      ASSERT_FALSE(xml.empty()) << f;
+      const auto at = xml.find("NumberOfPoints=\"");
+      ASSERT_NE(at, std::string::npos) << f;
+      const int n = std::stoi(xml.substr(at + 16));
+      EXPECT_GT(n, 0) << f;
+      points += n;
+      for (const char* a : {"vel", "rho", "press", "id"})
+        EXPECT_NE(xml.find(std::string("Name=\"") + a + "\""), std::string::npos) << f << ": " << a;
+    }
+    // Each rank keeps ceil(n_rank / 4) of its n_rank particles.
+    EXPECT_GE(points, kFluid / 4) << piece;
+    EXPECT_LE(points, kFluid / 4 + ranks - 1) << piece;
+  }
+}
+
+void check_dam_break(const std::string& out, int ranks) {
+  EXPECT_NE(slurp(out + "/run.log").find("in situ: catalyst, 3 script(s) every 100 steps"),
+            std::string::npos);
+  const std::string timing = slurp(out + "/catalyst/timing.json");
+  EXPECT_NE(timing.find("\"extract_steps\": 5,"), std::string::npos) << timing;
+  {
+    SCOPED_TRACE("impact force");
+    check_impact_force(out);
+  }
+  {
+    SCOPED_TRACE("run-up");
+    check_runup(out + "/catalyst");
+  }
+  {
+    SCOPED_TRACE("decimated particles");
+    check_particles(out + "/catalyst", ranks);
   }
 }
 
 TEST(Catalyst, DamBreakExtractsMatchTheSolver) {
-  fs::remove_all(kOut);
-  const std::string cmd =
-      std::string(SPHDEM_BINARY) + " run " + kScene + " --out " + kOut + " --quiet --max-steps " +
-      std::to_string(kSteps) +
-      " --set sph.dp=0.0073"
-      " --set 'solids=[{name: tank, shape: {type: tank, inner_lo: [0, -0.5, 0],"
-      " inner_hi: [0.584, 0.5, 0.35], thickness: 0.02}}, {name: barrier,"
-      " shape: {type: box, lo: [0.17, -0.5, 0], hi: [0.19, 0.5, 0.04]}}]'"
-      " --set 'fluid_blocks[0].velocity=[1.5, 0, 0]'"
-      " --set 'insitu={scripts: [catalyst/impact_force.py, catalyst/runup.py,"
-      " catalyst/particles.py], every_steps: " +
-      std::to_string(kEvery) +
-      "}'"
-      " --set 'diagnostics={every: 1e-9, energy: false, forces: [{name: tank_force,"
-      " solid: tank}, {name: barrier_force, solid: barrier}]}' > " +
-      kOut + ".log 2>&1";
+  const std::string out = "catalyst_dam_break";
+  fs::remove_all(out);
   // Exit 0: the processor was finalized before MPI_Finalize (otherwise Open MPI aborts).
-  ASSERT_EQ(sh(cmd), 0) << slurp(kOut + ".log");
-  EXPECT_NE(slurp(kOut + "/run.log").find("in situ: catalyst, 3 script(s) every 100 steps"),
-            std::string::npos);
-  const std::string timing = slurp(kDir + "/timing.json");
-  EXPECT_NE(timing.find("\"extract_steps\": 5,"), std::string::npos) << timing;
-  {
-    SCOPED_TRACE("impact force");
-    check_impact_force();
-  }
-  {
-    SCOPED_TRACE("run-up");
-    check_runup();
-  }
-  {
-    SCOPED_TRACE("decimated particles");
-    check_particles();
-  }
+  ASSERT_EQ(sh(dam_break_command(out, "")), 0) << slurp(out + ".log");
+  check_dam_break(out, 1);
+}
+
+// The same run on 2 ranks: each rank hands Catalyst its own fluid and walls, and the scripts
+// reduce over the ranks, so the tables are whole (one row per solid, one per x bin) and equal
+// the solver's gathered force CSVs; the cloud is one piece per rank. Before the reductions the
+// table had each solid twice, with each rank's share of its force.
+TEST(Catalyst, ExtractsAreWholeOnTwoRanks) {
+  const std::string out = "catalyst_dam_break_np2";
+  fs::remove_all(out);
+  const std::string mpiexec = "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 " +
+                              std::string(SPHDEM_MPIEXEC) + " --oversubscribe -n 2 ";
+  ASSERT_EQ(sh(dam_break_command(out, mpiexec)), 0) << slurp(out + ".log");
+  EXPECT_NE(slurp(out + "/run.log").find("2 ranks"), std::string::npos) << slurp(out + "/run.log");
+  check_dam_break(out, 2);
 }
 
 // Boulders (tests/data/scenes/catalyst_boulders.yaml): the extract's grain columns are the
