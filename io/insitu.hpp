@@ -13,6 +13,9 @@
 //            last fluid step as in impact_force.csv's grain columns; zero for a solid that is no
 //            DEM wall, and everywhere in a run without grains)
 //   both carry field data: time, step, dp, h, dim.
+// On many ranks each rank passes its owned fluid and the wall particles it owns, so a sum over
+// the points is that rank's share (the scripts in inputs/catalyst/ reduce over the ranks);
+// grain_force is whole on every rank (the DEM is replicated).
 // The adaptor owns its library state and releases it in its destructor, so it must be destroyed
 // before MPI_Finalize (run_scene's adaptor is a local of run_scene).
 #pragma once
