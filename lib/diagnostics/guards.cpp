@@ -1,7 +1,9 @@
 #include "diagnostics/guards.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <vector>
 
 #include "core/error.hpp"
 
@@ -99,19 +101,51 @@ void check_particle_guards(const Scene& scene, const StepParams& p, const Partic
   // solid has crossed the wall (the first fluid layer sits at phi = +dp/2, the first boundary
   // layer at -dp/2).
   const Real tol = scene.guards.penetration_depth * p.dp;
-  for (Index i = 0; i < ps.n_fluid; ++i) {
-    for (const Solid& s : scene.solids) {
-      if (s.removed_by(time)) continue;  // an opened gate
-      const Real phi = s.sdf->phi(ps.pos[i]);
-      if (phi < -tol) {
-        std::ostringstream d;
-        d << "fluid particle id " << ps.id[i] << " is " << -phi << " m inside solid '" << s.name
-          << "' at (" << ps.pos[i].x << ", " << ps.pos[i].y << ", " << ps.pos[i].z << ")";
-        fail("fluid inside a solid", time, step, d.str(),
-             "The wall is too thin for the kernel or the step too large; add boundary layers or "
-             "lower time.cfl");
+  // A point outside a solid's bounding box (grown by tol) is not inside it: most particles are
+  // far from most solids (the flume's seven barrier walls), and the SDF is evaluated only for
+  // the solids whose box holds the particle. The scan runs on all threads and finds the first
+  // offender in slot order, so the message is the same at any thread count.
+  struct Candidate {
+    const Solid* solid;
+    geom::Aabb box;
+  };
+  std::vector<Candidate> solids;
+  for (const Solid& s : scene.solids) {
+    if (s.removed_by(time)) continue;  // an opened gate
+    geom::Aabb b = s.sdf->bounds();
+    b.lo -= Vec3(tol, tol, tol);
+    b.hi += Vec3(tol, tol, tol);
+    solids.push_back({&s, b});
+  }
+  auto inside = [](const geom::Aabb& b, const Vec3& x) {
+    return x.x >= b.lo.x && x.x <= b.hi.x && x.y >= b.lo.y && x.y <= b.hi.y && x.z >= b.lo.z &&
+           x.z <= b.hi.z;
+  };
+  const long n = long(ps.n_fluid), ns = long(solids.size());
+  long first = n;  // the first (particle, solid) pair inside, as particle * ns + solid
+  if (ns > 0) {
+    first = n * ns;
+#pragma omp parallel for schedule(static) reduction(min : first)
+    for (long i = 0; i < n; ++i) {
+      for (long k = 0; k < ns; ++k) {
+        if (!inside(solids[k].box, ps.pos[i])) continue;
+        if (solids[k].solid->sdf->phi(ps.pos[i]) < -tol) {
+          first = std::min(first, i * ns + k);
+          break;
+        }
       }
     }
+  }
+  if (ns > 0 && first < n * ns) {
+    const Index i = Index(first / ns);
+    const Solid& s = *solids[first % ns].solid;
+    const Real phi = s.sdf->phi(ps.pos[i]);
+    std::ostringstream d;
+    d << "fluid particle id " << ps.id[i] << " is " << -phi << " m inside solid '" << s.name
+      << "' at (" << ps.pos[i].x << ", " << ps.pos[i].y << ", " << ps.pos[i].z << ")";
+    fail("fluid inside a solid", time, step, d.str(),
+         "The wall is too thin for the kernel or the step too large; add boundary layers or "
+         "lower time.cfl");
   }
 }
 

@@ -53,6 +53,19 @@ void compute_pressure(Space s, ParticleView v, Index begin, Index end, EosParams
       });
 }
 
+// The mDBC sums at ghost node rg over the fluid (and halo fluid) within 2h. Flattened: the
+// neighbour loop and the accumulation inline into one function, so the sums stay local.
+SPHDEM_HD SPHDEM_FLATTEN inline MdbcSums mdbc_gather(const StepParams& p, const NeighborLists& nl,
+                                                     const ParticleView& v, const Vec3& rg) {
+  MdbcSums sums;
+  for_each_fluid_neighbor(p, nl, v.pos, rg, [&](Index j, const Vec3& r_gj, Real r2) {
+    Real w, f;
+    kernel_wf(p.kernel, std::sqrt(r2), w, f);
+    mdbc_accumulate(sums, v.mass[j] / v.rho[j], v.rho[j], v.vel[j], -r_gj, w, f);  // r_j - r_G
+  });
+  return sums;
+}
+
 // mDBC: boundary density from the ghost-node interpolation over fluid, and the boundary velocity
 // for the viscous term. Boundary slots [begin, end); v.vel holds the solid's own velocity.
 // With `mine` (one flag per slot of the range), slots whose flag is 0 are zeroed instead: another
@@ -69,16 +82,7 @@ void update_mdbc(Space s, ParticleView v, NeighborLists nl, StepParams p, Index 
           v.vel_bc[b] = Vec3();
           return;
         }
-        auto gather = [&](const Vec3& rg) {
-          MdbcSums sums;
-          for_each_fluid_neighbor(p, nl, v.pos, rg, [&](Index j, const Vec3& r_gj, Real r2) {
-            const Real r = std::sqrt(r2);
-            const Vec3 d = -r_gj;  // r_j - r_G
-            mdbc_accumulate(sums, v.mass[j] / v.rho[j], v.rho[j], v.vel[j], d,
-                            kernel_w(p.kernel, r), kernel_f(p.kernel, r));
-          });
-          return sums;
-        };
+        auto gather = [&](const Vec3& rg) { return mdbc_gather(p, nl, v, rg); };
         Vec3 rg = v.ghost[b];
         Vec3 normal = v.normal[b];
         MdbcSums sums = gather(rg);

@@ -41,4 +41,17 @@ SPHDEM_HD inline Real kernel_f(const KernelParams& k, Real r) {
   return Real(-5) * k.alpha * a * a * a * k.inv_h * k.inv_h;
 }
 
+// W and F together, for loops that need both (the mDBC ghost-node sums): one q and one (1 - q/2).
+SPHDEM_HD inline void kernel_wf(const KernelParams& k, Real r, Real& w, Real& f) {
+  const Real q = r * k.inv_h;
+  if (q >= Real(2)) {
+    w = f = Real(0);
+    return;
+  }
+  const Real a = Real(1) - Real(0.5) * q;
+  const Real a3 = k.alpha * a * a * a;
+  w = a3 * a * (Real(2) * q + Real(1));
+  f = Real(-5) * a3 * k.inv_h * k.inv_h;
+}
+
 }  // namespace sphdem

@@ -19,32 +19,51 @@
 
 namespace sphdem {
 
-// Accumulated sums at one ghost node (a 4x4 system in 3D; in 2D the y row/column is unused).
+// Accumulated sums at one ghost node. The 4x4 matrix of the system above is kept in its 20
+// distinct entries: row 0 is (shepard, wd), column 0 below it is g, and the lower-right 3x3 block,
+// sum V_j gradW (r_j - r_G)^T = -sum V_j F (r_j - r_G)(r_j - r_G)^T, is symmetric (gd). In 2D the
+// y entries stay zero and are not used.
 struct MdbcSums {
-  Real a[4][4] = {{0}};  // row 0: W terms; rows 1-3: gradW terms
-  Real b[4] = {0};
-  Real shepard = 0;  // sum V_j W
+  Real shepard = 0;  // sum V_j W (the matrix's entry (0,0))
+  Real wd[3] = {0};  // sum V_j W (r_j - r_G)
+  Real g[3] = {0};   // sum V_j gradW
+  Real gd[6] = {0};  // sum V_j gradW (r_j - r_G)^T: xx, xy, xz, yy, yz, zz
+  Real b[4] = {0};   // right-hand side: sum V_j rho_j W, sum V_j rho_j gradW
   Vec3 vel;          // sum V_j v_j W
+  // Entry (r, c) of the 4x4 matrix (0: rho, 1-3: x, y, z).
+  SPHDEM_HD Real a(int r, int c) const {
+    if (r == 0) return c == 0 ? shepard : wd[c - 1];
+    if (c == 0) return g[r - 1];
+    const int i = r < c ? r - 1 : c - 1, j = r < c ? c - 1 : r - 1;  // i <= j
+    return gd[i == 0 ? j : i + j + 1];  // (0,0..2) -> 0..2, (1,1) -> 3, (1,2) -> 4, (2,2) -> 5
+  }
 };
 
-// Adds fluid particle j (at offset d = r_j - r_G, distance r) to the sums.
+// Adds fluid particle j (volume v_j, at offset d = r_j - r_G; w = W and f = F at its distance)
+// to the sums.
 SPHDEM_HD inline void mdbc_accumulate(MdbcSums& s, Real v_j, Real rho_j, const Vec3& vel_j,
                                       const Vec3& d, Real w, Real f) {
   // gradW at G with respect to r_G: (r_G - r_j) F = -d F.
-  const Vec3 gw = d * (-f);
   const Real vw = v_j * w;
-  const Real row0[4] = {vw, vw * d.x, vw * d.y, vw * d.z};
-  const Real g[3] = {v_j * gw.x, v_j * gw.y, v_j * gw.z};
-  for (int c = 0; c < 4; ++c) s.a[0][c] += row0[c];
-  for (int r = 0; r < 3; ++r) {
-    s.a[r + 1][0] += g[r];
-    s.a[r + 1][1] += g[r] * d.x;
-    s.a[r + 1][2] += g[r] * d.y;
-    s.a[r + 1][3] += g[r] * d.z;
-    s.b[r + 1] += g[r] * rho_j;
-  }
-  s.b[0] += vw * rho_j;
+  const Real vf = -v_j * f;
+  const Real gx = vf * d.x, gy = vf * d.y, gz = vf * d.z;
   s.shepard += vw;
+  s.wd[0] += vw * d.x;
+  s.wd[1] += vw * d.y;
+  s.wd[2] += vw * d.z;
+  s.g[0] += gx;
+  s.g[1] += gy;
+  s.g[2] += gz;
+  s.gd[0] += gx * d.x;
+  s.gd[1] += gx * d.y;
+  s.gd[2] += gx * d.z;
+  s.gd[3] += gy * d.y;
+  s.gd[4] += gy * d.z;
+  s.gd[5] += gz * d.z;
+  s.b[0] += vw * rho_j;
+  s.b[1] += gx * rho_j;
+  s.b[2] += gy * rho_j;
+  s.b[3] += gz * rho_j;
   s.vel += vel_j * vw;
 }
 
@@ -73,7 +92,7 @@ SPHDEM_HD inline Real mdbc_boundary_density(const MdbcSums& s, int dim, const Ve
   for (int r = 0; r < n; ++r) {
     const Real row_scale = r > 0 ? length : Real(1);  // gradW rows times h
     for (int c = 0; c < n; ++c)
-      m[r][c] = s.a[idx[r]][idx[c]] * row_scale / (c > 0 ? length : Real(1));  // unknown h grad
+      m[r][c] = s.a(idx[r], idx[c]) * row_scale / (c > 0 ? length : Real(1));  // unknown h grad
     m[r][n] = s.b[idx[r]] * row_scale;
   }
   // Scale-aware singularity test: determinant relative to the product of row norms.

@@ -80,6 +80,20 @@ TEST(SphKernel, DerivativeMatchesFiniteDifference) {
   EXPECT_LT(kernel_f(k, 0.0), 0);  // finite at r = 0
 }
 
+// kernel_wf gives W and F in one pass: the same values as kernel_w and kernel_f.
+TEST(SphKernel, CombinedWAndFMatchSeparate) {
+  for (int dim : {2, 3}) {
+    const KernelParams k = make_kernel(dim, 0.05);
+    for (Real r : {Real(0), Real(0.013), Real(0.05), Real(0.0999), Real(0.1), Real(0.2)}) {
+      Real w, f;
+      kernel_wf(k, r, w, f);
+      EXPECT_NEAR(w, kernel_w(k, r), tol(1e-13, 8 * kFloatEps) * k.alpha) << "r = " << r;
+      EXPECT_NEAR(f, kernel_f(k, r), tol(1e-13, 8 * kFloatEps) * k.alpha * k.inv_h * k.inv_h)
+          << "r = " << r;
+    }
+  }
+}
+
 TEST(SphEos, TaitAndInverse) {
   const EosParams e = make_eos(1000, 30, 7);
   EXPECT_DOUBLE_EQ(tait_pressure(e, 1000), 0);
@@ -88,6 +102,26 @@ TEST(SphEos, TaitAndInverse) {
   for (Real p : {0.0, 10.0, 5000.0, -200.0})
     EXPECT_NEAR(tait_pressure(e, tait_density(e, p)), p, tol(1e-7, tait_tol(e, p, 12)));
   EXPECT_NEAR(tait_sound_speed(e, 1000), 30, 1e-12);
+}
+
+// An integer gamma takes the multiplication path; it agrees with pow to a few ulps, and a
+// fractional gamma still uses pow.
+TEST(SphEos, IntegerGammaMatchesPow) {
+  for (int gamma : {1, 2, 7, 16}) {
+    const EosParams e = make_eos(1000, 30, gamma);
+    ASSERT_EQ(e.gamma_int, gamma);
+    for (Real rho : {Real(900), Real(999.5), Real(1000), Real(1003.7), Real(1100)}) {
+      const double ref = double(e.b) * (std::pow(double(rho) / 1000.0, double(gamma)) - 1.0);
+      EXPECT_NEAR(tait_pressure(e, rho), ref, tol(1e-12, 64 * kFloatEps) * e.b)
+          << "gamma " << gamma << " rho " << rho;
+    }
+  }
+  const EosParams frac = make_eos(1000, 30, Real(7.5));
+  EXPECT_EQ(frac.gamma_int, 0);
+  EXPECT_NEAR(tait_pressure(frac, 1010), frac.b * (std::pow(Real(1.01), Real(7.5)) - 1),
+              tol(1e-9, 64 * kFloatEps) * frac.b);
+  EXPECT_EQ(int_pow(Real(3), 0), 1);
+  EXPECT_EQ(int_pow(Real(3), 5), 243);
 }
 
 // fluid.p_min bounds the tension; pressures above it are untouched.
