@@ -122,21 +122,18 @@ void check_particle_guards(const Scene& scene, const StepParams& p, const Partic
            x.z <= b.hi.z;
   };
   const long n = long(ps.n_fluid), ns = long(solids.size());
-  long first = n;  // the first (particle, solid) pair inside, as particle * ns + solid
-  if (ns > 0) {
-    first = n * ns;
+  long first = n * ns;  // the first (particle, solid) pair inside, as particle * ns + solid
 #pragma omp parallel for schedule(static) reduction(min : first)
-    for (long i = 0; i < n; ++i) {
-      for (long k = 0; k < ns; ++k) {
-        if (!inside(solids[k].box, ps.pos[i])) continue;
-        if (solids[k].solid->sdf->phi(ps.pos[i]) < -tol) {
-          first = std::min(first, i * ns + k);
-          break;
-        }
+  for (long i = 0; i < n; ++i) {
+    for (long k = 0; k < ns; ++k) {
+      if (!inside(solids[k].box, ps.pos[i])) continue;
+      if (solids[k].solid->sdf->phi(ps.pos[i]) < -tol) {
+        first = std::min(first, i * ns + k);
+        break;
       }
     }
   }
-  if (ns > 0 && first < n * ns) {
+  if (first < n * ns) {
     const Index i = Index(first / ns);
     const Solid& s = *solids[first % ns].solid;
     const Real phi = s.sdf->phi(ps.pos[i]);

@@ -23,25 +23,9 @@ inline KernelParams make_kernel(int dim, Real h) {
   return k;
 }
 
-// W(r, h).
-SPHDEM_HD inline Real kernel_w(const KernelParams& k, Real r) {
-  const Real q = r * k.inv_h;
-  if (q >= Real(2)) return Real(0);
-  const Real a = Real(1) - Real(0.5) * q;
-  const Real a2 = a * a;
-  return k.alpha * a2 * a2 * (Real(2) * q + Real(1));
-}
-
-// F(r) = (dW/dr) / r, so that grad_i W(r_ij) = r_ij * F. dW/dq = -5 alpha q (1 - q/2)^3, which
-// gives F = -5 alpha (1 - q/2)^3 / h^2 (finite at r = 0).
-SPHDEM_HD inline Real kernel_f(const KernelParams& k, Real r) {
-  const Real q = r * k.inv_h;
-  if (q >= Real(2)) return Real(0);
-  const Real a = Real(1) - Real(0.5) * q;
-  return Real(-5) * k.alpha * a * a * a * k.inv_h * k.inv_h;
-}
-
-// W and F together, for loops that need both (the mDBC ghost-node sums): one q and one (1 - q/2).
+// W and F = (dW/dr) / r together, so that grad_i W(r_ij) = r_ij * F. dW/dq = -5 alpha q
+// (1 - q/2)^3, which gives F = -5 alpha (1 - q/2)^3 / h^2 (finite at r = 0). The one place the
+// kernel is written: kernel_w and kernel_f call it, and inlined, the unused half is dropped.
 SPHDEM_HD inline void kernel_wf(const KernelParams& k, Real r, Real& w, Real& f) {
   const Real q = r * k.inv_h;
   if (q >= Real(2)) {
@@ -52,6 +36,20 @@ SPHDEM_HD inline void kernel_wf(const KernelParams& k, Real r, Real& w, Real& f)
   const Real a3 = k.alpha * a * a * a;
   w = a3 * a * (Real(2) * q + Real(1));
   f = Real(-5) * a3 * k.inv_h * k.inv_h;
+}
+
+// W(r, h).
+SPHDEM_HD inline Real kernel_w(const KernelParams& k, Real r) {
+  Real w, f;
+  kernel_wf(k, r, w, f);
+  return w;
+}
+
+// F(r).
+SPHDEM_HD inline Real kernel_f(const KernelParams& k, Real r) {
+  Real w, f;
+  kernel_wf(k, r, w, f);
+  return f;
 }
 
 }  // namespace sphdem
