@@ -694,7 +694,8 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
       f = FastestFluid{buf[0], GlobalId(id), Vec3(Real(buf[1]), Real(buf[2]), Real(buf[3])),
                        Vec3(Real(buf[4]), Real(buf[5]), Real(buf[6])), Real(buf[7])};
     }
-    return fastest_fluid_text(f);
+    return fastest_fluid_text(f) + near_solid_text(scene, solver->time(), f.pos, rep.boundary_depth,
+                                                   rep.thin, rep.boundary_depth);
   };
   std::unique_ptr<FrameWriter> frames;
   Real next_frame = 0;

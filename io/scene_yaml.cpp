@@ -1334,9 +1334,13 @@ void Parser::parse_diagnostics(const Field& f) {
       MapReader g = map(item, {"name", "from", "to", "samples", "times", "quantity"});
       ProfileSpec ps;
       ps.name = diagnostic_name(g);
-      ps.from = g.vec3("from", kCoord);
+      Field f_from = g.require("from");
+      ps.from = vec3(f_from, kCoord);
       Field f_to = g.require("to");
       ps.to = vec3(f_to, kCoord);
+      // A sample outside the domain would read an empty column (elevation 0), not the flow.
+      check_in_domain(f_from, ps.from, "");
+      check_in_domain(f_to, ps.to, "");
       if (norm2(ps.to - ps.from) == 0) fail(f_to, "must differ from 'from'");
       ps.samples = g.integer("samples", 2, 1000000, ps.samples);
       ps.velocity = g.enumeration("quantity", kProfileQuantities, false);

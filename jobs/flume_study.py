@@ -11,7 +11,8 @@
 It writes OUT/summary.csv and OUT/summary.md with, per case, the opening ratio (from
 `sphdem check`), the peak force on the middle wall and its time (the largest sample, and the
 peak of the 0.05 s running mean, with the total's), the final (static) force, the
-largest run-up, the trap ratio, the boulders upstream and downstream at the end, the largest
+largest run-up, the trap ratio (fluid upstream of the row over the fluid still in the domain)
+and the upstream share of all the debris, the boulders upstream and downstream at the end, the largest
 front speed (over 0.05 s windows of front.csv), and the run's steps and wall time
 (summary.json), and draws OUT/force.png (middle-wall force against time, every case on one
 axis), OUT/profiles.png (centreline surface at the profile time) and, for cases with grains,
@@ -26,6 +27,12 @@ OUT/barrier_loads.png (the fluid's and the boulders' contact force on all barrie
 the case without boulders; the V layouts as built are not symmetric, and grains are not
 mirrored): `symmetry: {axis: y, at: 0.2}`, whose diagnostics are the full scene's
 (docs/VALIDATION.md, "Symmetry plane").
+
+--channel-end X ends the domain at x = X (an open outflow: fluid past it is removed and
+counted), so the fluid that has passed the barrier costs nothing once it is X - 0.6 m below the
+row. At X = 0.9 the middle-wall force, the run-up and the upstream mass agree with the whole
+channel's (docs/STUDIES.md, "Ending the domain below the barrier"); front.csv and the profile
+then stop at X.
 
 --trend CSV draws OUT/<CSV name>_trend.png from a fraction study's summary table instead of
 running: the middle-wall and total peaks (0.05 s running mean) and the largest run-up against
@@ -205,6 +212,10 @@ def summarize(run_dir, until=float("inf")):
         **grains,
         "max_runup": max((r[1] for r in ru), default=0.0),
         "trap_ratio": up / (up + down) if up + down > 0 else float("nan"),
+        # Upstream over all the debris released (trap.csv's first row): fluid that left the
+        # domain counts as passed, so this one does not depend on where the domain ends.
+        "upstream_of_total": up / (tr[0][1] + tr[0][2]) if tr and tr[0][1] + tr[0][2] > 0
+        else float("nan"),
         "series": (t, f_mid),
         "smooth": (t, s_mid),
         "grain_smooth": g_series,
@@ -248,6 +259,10 @@ def main():
                     help="summarize rows up to this time only (compare cases that ended early)")
     ap.add_argument("--symmetry", action="store_true",
                     help="model half of the cases symmetric about y = 0.2 (P00, no boulders)")
+    ap.add_argument("--channel-end", type=float, metavar="X",
+                    help="end the domain (an open outflow) at x = X instead of the channel's "
+                         "1.4 m, and the centreline profile with it (docs/STUDIES.md, "
+                         "'Ending the domain below the barrier')")
     ap.add_argument("--trend", metavar="CSV",
                     help="draw the fraction trend from this summary table and stop")
     a = ap.parse_args()
@@ -255,6 +270,12 @@ def main():
     if a.trend:
         trend(a.trend, a.out)
         return
+    if a.channel_end is not None:
+        if not BARRIER_X < a.channel_end <= 1.4:
+            sys.exit("--channel-end %g: must lie between the barrier row (x = %g m) and the "
+                     "channel's end (1.4 m)" % (a.channel_end, BARRIER_X))
+        a.sets = ["domain.hi[0]=%r" % a.channel_end,
+                  "diagnostics.profiles[0].to[0]=%r" % a.channel_end] + a.sets
     results = []
     for p, scene, case_sets in cases(a.study, a.presets):
         run_dir = os.path.join(a.out, p)
@@ -281,7 +302,7 @@ def main():
             "peak_total_50ms", "static_force_mid", "static_total", "peak_grain_mid_50ms",
             "static_grain_mid", "static_grain_total", "peak_grain_total_50ms",
             "peak_mid_with_grains_50ms", "static_mid_with_grains", "max_runup", "trap_ratio",
-            "grains_upstream", "grains_downstream", "front_speed", "t_end", "steps", "wall_s",
+            "upstream_of_total", "grains_upstream", "grains_downstream", "front_speed", "t_end", "steps", "wall_s",
             "finished"]
     write_table(os.path.join(a.out, "summary"), cols, results)
     try:

@@ -40,6 +40,36 @@ std::string fastest_fluid_text(const FastestFluid& f) {
   return d.str();
 }
 
+std::string near_solid_text(const Scene& scene, Real time, const Vec3& x, Real reach,
+                            const std::vector<ThinSolid>& thin, Real boundary_depth) {
+  const Real dp = scene.sph.dp;
+  const Solid* best = nullptr;
+  Real best_phi = reach;
+  for (const Solid& s : scene.solids) {
+    if (s.removed_by(time)) continue;
+    const Real phi = s.sdf->phi(x);
+    if (phi < best_phi) {
+      best_phi = phi;
+      best = &s;
+    }
+  }
+  if (!best) return "";
+  std::ostringstream d;
+  d << "; it is " << std::fabs(best_phi) * 1000 << " mm "
+    << (best_phi < 0 ? "inside solid '" : "from the surface of solid '") << best->name << "'";
+  // The first fluid layer sits dp/2 off a wall: nearer, the particle is pressed against it.
+  if (best_phi >= 0 && best_phi < Real(0.5) * dp)
+    d << " (nearer than dp/2 = " << Real(0.5) * dp * 1000
+      << " mm, where the first fluid layer sits)";
+  for (const ThinSolid& t : thin)
+    if (t.name == best->name)
+      d << ", which is " << t.thickness * 1000 << " mm thick, less than the boundary depth "
+        << boundary_depth * 1000
+        << " mm: its truncated boundary lets fluid be pressed into it and shot out; thicken the "
+           "solid or refine dp (a higher c0 only stiffens the fluid)";
+  return d.str();
+}
+
 void check_step_guards(const Scene& scene, const StepParams& p, const StepStats& st, Real time,
                        std::int64_t step, const std::function<std::string()>& locate) {
   if (!std::isfinite(st.dt) || !std::isfinite(st.max_speed) || !std::isfinite(st.rho_min) ||

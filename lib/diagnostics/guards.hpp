@@ -7,6 +7,7 @@
 #include <functional>
 #include <string>
 
+#include "scene/build.hpp"
 #include "scene/scene.hpp"
 #include "solver/fluid_params.hpp"
 #include "solver/particles.hpp"
@@ -32,6 +33,15 @@ FastestFluid fastest_fluid(const ParticleSet<Host>& ps);
 
 // "fluid particle id N at (x, y, z), speed S m/s, velocity (u, v, w), density rho kg/m^3".
 std::string fastest_fluid_text(const FastestFluid& f);
+
+// Where x stands against the nearest solid whose surface lies within `reach` (removed solids
+// skipped): "; it is 5.5 mm inside solid 'barrier_2'" or "...from the surface of solid ..."
+// (saying so when that is nearer than dp/2, where the first fluid layer sits), and, when that
+// solid is one of `thin` (thinner than the boundary depth), that it can leak.
+// Empty when no solid is that near. The Mach guard appends it to the fastest particle: a
+// particle squeezed into a thin wall is the usual cause of a lone fast particle.
+std::string near_solid_text(const Scene& scene, Real time, const Vec3& x, Real reach,
+                            const std::vector<ThinSolid>& thin, Real boundary_depth);
 
 // Per-particle checks on a host copy: NaN/Inf in position, velocity, density; density bounds;
 // fluid inside a solid (deeper than dp/2 below its surface).

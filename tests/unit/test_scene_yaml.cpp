@@ -124,6 +124,8 @@ const BadFile kBadFiles[] = {
      "the x-z plane"},
     {"zero_normal.yaml", ":8: solids[0].shape.normal: must not be the zero vector"},
     {"dt_fixed_below_dt_min.yaml", ":8: time.dt_fixed: 1e-7 is below time.dt_min = 1e-6"},
+    {"profile_outside_domain.yaml",
+     ":10: diagnostics.profiles[0].to: x = 1.4 is outside the domain (x from 0 to 1)"},
     {"profile_times_not_increasing.yaml",
      ":14: diagnostics.profiles[0].times[2]: times must be increasing; 0.2 follows 0.3"},
     {"probe_missing_solid.yaml",
