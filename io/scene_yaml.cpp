@@ -771,8 +771,8 @@ void Parser::parse_fluid(const Field& f) {
 
 void Parser::parse_sph(const Field& f) {
   SphParams& p = scene_->sph;
-  MapReader m = map(
-      f, {"dp", "h_factor", "boundary", "slip", "boundary_layers", "no_penetration", "pairwise"});
+  MapReader m = map(f, {"dp", "h_factor", "boundary", "slip", "boundary_layers", "no_penetration",
+                        "mdbc_limiter", "pairwise"});
   p.dp = m.number("dp", left_open(0, 1));
   p.h_factor = m.number("h_factor", closed(0.5, 3), p.h_factor);
   p.boundary = m.enumeration("boundary", kBoundaryMethods, p.boundary);
@@ -782,6 +782,11 @@ void Parser::parse_sph(const Field& f) {
     fail(*m.find("no_penetration"),
          "the penetration control is part of mDBC (boundary: mdbc); DBC walls resist approach "
          "through their own density");
+  p.mdbc_limiter = m.boolean("mdbc_limiter", p.mdbc_limiter);
+  if (p.mdbc_limiter && p.boundary != BoundaryMethod::kMdbc)
+    fail(*m.find("mdbc_limiter"),
+         "the limiter bounds mDBC's extrapolated wall density (boundary: mdbc); DBC walls have "
+         "no extrapolation");
   p.boundary_layers = m.integer("boundary_layers", 0, 20, p.boundary_layers);
   p.pairwise = m.boolean("pairwise", p.pairwise);
 }

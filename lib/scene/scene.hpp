@@ -67,6 +67,9 @@ struct SphParams {
   // mDBC penetration control (sph/mdbc.hpp, wall_pair_*): walls never pull fluid, and fluid
   // moving toward a wall sees the wall approach at the mirrored speed in the continuity equation.
   bool no_penetration = false;
+  // mDBC: keep each wall particle's extrapolated density within the range of the fluid densities
+  // at its ghost node, widened by their spread (sph/mdbc.hpp, mdbc_limit_density).
+  bool mdbc_limiter = false;
   // CPU: each pair of owned fluid particles is evaluated once for both (solver/pairwise_host.hpp;
   // LAMMPS' `newton on`); false gathers every pair from both sides, as the GPU does.
   bool pairwise = true;

@@ -100,6 +100,7 @@ void update_mdbc(Space s, ParticleView v, NeighborLists nl, StepParams p, Index 
         const Vec3 rb_minus_rg = p.grid.separation(v.pos[b], rg);
         Real rho_b =
             mdbc_boundary_density(sums, p.dim, rb_minus_rg, p.eos.rho0, p.mdbc_det_min, p.kernel.h);
+        if (p.mdbc_limit) rho_b = mdbc_limit_density(sums, rho_b);
         // Walls push, never pull: a boundary below rho0 would attract the free surface.
         if (rho_b < p.eos.rho0) rho_b = p.eos.rho0;
         v.rho[b] = rho_b;

@@ -28,6 +28,7 @@ StepParams make_step_params(const Scene& scene, Real c0) {
   p.mdbc = scene.sph.boundary == BoundaryMethod::kMdbc;
   p.free_slip = scene.sph.slip == SlipCondition::kFreeSlip;
   p.no_penetration = p.mdbc && scene.sph.no_penetration;
+  p.mdbc_limit = p.mdbc && scene.sph.mdbc_limiter;
   p.pairwise = scene.sph.pairwise;
   const RheologyParams& rh = scene.fluid.rheology;
   p.hbp = rh.model == RheologyModel::kHbp;

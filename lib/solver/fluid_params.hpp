@@ -32,6 +32,7 @@ struct StepParams {
   bool mdbc = true;                   // else plain DBC
   bool free_slip = false;
   bool no_penetration = false;  // mDBC only (see SphParams)
+  bool mdbc_limit = false;      // mDBC only: sph.mdbc_limiter (sph/mdbc.hpp)
   bool pairwise = true;         // CPU: one evaluation per owned fluid pair (see SphParams)
   Real mdbc_det_min = Real(1e-3);
   bool hbp = false;  // per-particle mu_eff from the HBP model drives the laminar term

@@ -30,6 +30,8 @@ struct MdbcSums {
   Real gd[6] = {0};  // sum V_j gradW (r_j - r_G)^T: xx, xy, xz, yy, yz, zz
   Real b[4] = {0};   // right-hand side: sum V_j rho_j W, sum V_j rho_j gradW
   Vec3 vel;          // sum V_j v_j W
+  // The range of the fluid densities seen (for mdbc_limit_density); empty while shepard is 0.
+  Real rho_lo = Real(3e38), rho_hi = Real(-3e38);
   // Entry (r, c) of the 4x4 matrix (0: rho, 1-3: x, y, z).
   SPHDEM_HD Real a(int r, int c) const {
     if (r == 0) return c == 0 ? shepard : wd[c - 1];
@@ -48,6 +50,8 @@ SPHDEM_HD inline void mdbc_accumulate(MdbcSums& s, Real v_j, Real rho_j, const V
   const Real vf = -v_j * f;
   const Real gx = vf * d.x, gy = vf * d.y, gz = vf * d.z;
   s.shepard += vw;
+  if (rho_j < s.rho_lo) s.rho_lo = rho_j;
+  if (rho_j > s.rho_hi) s.rho_hi = rho_j;
   s.wd[0] += vw * d.x;
   s.wd[1] += vw * d.y;
   s.wd[2] += vw * d.z;
@@ -137,6 +141,22 @@ SPHDEM_HD inline Real mdbc_boundary_density(const MdbcSums& s, int dim, const Ve
     grad = Vec3(x[1], x[2], x[3]) / length;
   }
   return x[0] + dot(rb_minus_rg, grad);
+}
+
+// Limiter for the extrapolated boundary density (sph.mdbc_limiter). The linear fit at a ghost
+// node with sparse or one-sided support (a jet through a barrier's slit, a splash) can return a
+// steep gradient, and r_B - r_G, up to twice the boundary depth (more where a thin wall mirrors
+// through its far face), multiplies it: rho_B three times rho0 was seen at the end of a V30
+// wall, whose pressure shot the fluid out of the slit at Mach 0.23. The limiter keeps rho_B
+// within the fluid densities seen at G widened by their spread on either side,
+// [lo - (hi - lo), hi + (hi - lo)]. A linear field whose support reaches at least as far along
+// the gradient as the extrapolation goes past it (hydrostatic walls: the support spans the depth
+// plus 2h, the extrapolation at most the depth plus dp/2) is never clipped.
+SPHDEM_HD inline Real mdbc_limit_density(const MdbcSums& s, Real rho_b) {
+  if (!(s.shepard > Real(0))) return rho_b;
+  const Real spread = s.rho_hi - s.rho_lo;
+  const Real lo = s.rho_lo - spread, hi = s.rho_hi + spread;
+  return rho_b < lo ? lo : (rho_b > hi ? hi : rho_b);
 }
 
 // Boundary velocity for the viscous term: mirror of the ghost node's Shepard velocity about the

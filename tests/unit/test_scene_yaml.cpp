@@ -72,7 +72,7 @@ const BadFile kBadFiles[] = {
      ":6: checkpoint.every_steps: value -5 is out of range; allowed [0, 2e9]"},
     {"unknown_nested_key.yaml",
      ":5: sph.dpp: unknown key; allowed keys: dp, h_factor, boundary, slip, boundary_layers, "
-     "no_penetration, pairwise"},
+     "no_penetration, mdbc_limiter, pairwise"},
     {"unknown_deep_key.yaml",
      ":8: fluid.viscosity.mu: unknown key; allowed keys: model, nu, alpha"},
     {"wrong_type_number.yaml", ":6: time.end: expected a number, got 'soon'"},
@@ -205,6 +205,12 @@ TEST(SceneYamlBadOverride, GivesExactMessage) {
       {{"sph.boundary=dbc", "sph.no_penetration=true"},
        "--set sph.no_penetration=true: sph.no_penetration: the penetration control is part of "
        "mDBC (boundary: mdbc); DBC walls resist approach through their own density"},
+      {{"sph.boundary=dbc", "sph.mdbc_limiter=true"},
+       "--set sph.mdbc_limiter=true: sph.mdbc_limiter: the limiter bounds mDBC's extrapolated "
+       "wall density (boundary: mdbc); DBC walls have no extrapolation"},
+      {{"sph.mdbc_limiter=sometimes"},
+       "--set sph.mdbc_limiter=sometimes: sph.mdbc_limiter: expected true or false, got "
+       "'sometimes'"},
       {{"foo.bar=1"}, "--set foo.bar=1: unknown key 'foo.bar'"},
       {{"solids[0].shape.radius=1"},
        "--set solids[0].shape.radius=1: unknown key 'solids[0].shape.radius'"},
@@ -215,7 +221,7 @@ TEST(SceneYamlBadOverride, GivesExactMessage) {
        "laminar, artificial"},
       {{"sph={dpp: 1}"},
        "--set sph={dpp: 1}: sph.dpp: unknown key; allowed keys: dp, h_factor, boundary, slip, "
-       "boundary_layers, no_penetration, pairwise"},
+       "boundary_layers, no_penetration, mdbc_limiter, pairwise"},
       {{"domain={lo: [0, 0, 0]}"},
        "--set domain={lo: [0, 0, 0]}: domain.hi: required key is missing"},
       {{"diagnostics.forces[0].solid=tnk"},
