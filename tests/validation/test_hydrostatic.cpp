@@ -183,6 +183,26 @@ TEST(Hydrostatic, TankPressureAndFloorForce) {
   EXPECT_EQ(r.removed, 0);
 }
 
+// The mDBC density limiter (sph.mdbc_limiter) bounds the wall density only where the ghost
+// node's fit goes past the fluid it sees widened by its spread. In the tank at rest every wall
+// ghost node sees a hydrostatic (linear) field, so the limited run must meet the same accuracy
+// and carry the same floor force as the unlimited one.
+TEST(Hydrostatic, MdbcLimiterKeepsTheTankHydrostatic) {
+  const TankResult plain = run_tank({}, 1.5, 0.5, kG);
+  const TankResult r = run_tank({"sph.mdbc_limiter=true"}, 1.5, 0.5, kG);
+  std::printf(
+      "hydrostatic tank with sph.mdbc_limiter: pressure max rel %.4f, rms rel %.4f; floor force "
+      "%.3f N/m against %.3f without the limiter; %lld and %lld steps\n",
+      r.p_max_rel, r.p_rms_rel, r.floor_fz, plain.floor_fz, (long long)r.steps,
+      (long long)plain.steps);
+  ASSERT_FALSE(r.unstable) << r.failure;
+  ASSERT_FALSE(plain.unstable) << plain.failure;
+  EXPECT_LT(r.p_max_rel, 0.03);
+  EXPECT_NEAR(r.floor_fz / floor_force_expected(kG), 1.0, 0.02);
+  EXPECT_NEAR(r.floor_fz / plain.floor_fz, 1.0, 1e-3);
+  EXPECT_EQ(r.below_floor + r.outside_walls, 0);
+}
+
 // A perturbed input must make the comparator fail (DESIGN.md §8): with gravity doubled the
 // pressure and the floor force are about twice the original rho0 g (H - z) and rho0 g H L.
 TEST(Hydrostatic, ComparatorFailsWithDoubledGravity) {
