@@ -16,6 +16,7 @@
 
 #include "core/error.hpp"
 #include "io/scene_yaml.hpp"
+#include "solver/fluid_params.hpp"
 
 namespace sphdem {
 namespace {
@@ -615,6 +616,17 @@ TEST(SceneYaml, FindSolidAndH) {
   ASSERT_NE(s.find_solid("b"), nullptr);
   EXPECT_EQ(s.find_solid("b")->name, "b");
   EXPECT_EQ(s.find_solid("c"), nullptr);
+}
+
+// sph.mdbc_limiter reaches the solver's step parameters (update_mdbc reads p.mdbc_limit), and
+// only with mDBC walls.
+TEST(SceneYaml, MdbcLimiterReachesTheStepParameters) {
+  const std::string base =
+      "name: t\ndimension: 2\ndomain: {lo: [0, 0, 0], hi: [1, 0, 1]}\ntime: {end: 0.1}\n";
+  EXPECT_FALSE(make_step_params(parse_scene(base + "sph: {dp: 0.01}\n", "a.yaml"), 10).mdbc_limit);
+  EXPECT_TRUE(
+      make_step_params(parse_scene(base + "sph: {dp: 0.01, mdbc_limiter: true}\n", "b.yaml"), 10)
+          .mdbc_limit);
 }
 
 }  // namespace
