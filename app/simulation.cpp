@@ -303,6 +303,8 @@ class DiagnosticWriter {
     for (const auto& g : d.profiles) {
       profile_.emplace_back(path(g.name), profile_columns(g), append, keep_before);
     }
+    if (limiter_stats(s))
+      mdbc_.open(path("mdbc_limiter"), {"t", "clipped", "rho_fit_max"}, append, keep_before);
     if (d.energy)
       energy_.open(path("energy"), {"t", "kinetic", "potential", "total", "px", "py", "pz"}, append,
                    keep_before);
@@ -334,6 +336,14 @@ class DiagnosticWriter {
                  append, keep_before);
     }
   }
+  // mdbc_limiter.csv: what the mDBC density limiter does (clips, or would clip with it off) at
+  // each diagnostic time; written where it can act, mDBC walls with a barrier or the limiter on.
+  static bool limiter_stats(const Scene& s) {
+    return s.sph.boundary == BoundaryMethod::kMdbc && (s.barrier.enabled || s.sph.mdbc_limiter);
+  }
+  // The limiter's effect for the next write (collective: every rank computes it).
+  void set_mdbc_limiter(const MdbcLimiterStats& st) { mdbc_stats_ = st; }
+
   // Barrier wall k (1-based) is a DEM wall: grains press on it.
   static bool grain_wall(const Scene& s, int k) {
     for (const GrainWall& w : s.dem.walls)
@@ -419,6 +429,7 @@ class DiagnosticWriter {
                    e.momentum.z});
     }
     if (scene_.barrier.enabled) write_barrier(t, ps, p);
+    if (limiter_stats(scene_)) mdbc_.row({t, mdbc_stats_.clipped, mdbc_stats_.rho_fit_max});
   }
 
   // impact_force.csv: the fluid force on each barrier wall, its component along the channel (x)
@@ -465,7 +476,8 @@ class DiagnosticWriter {
   std::vector<CsvSeries> pressure_, height_, front_, force_, profile_;
   std::vector<std::size_t> profile_next_;
   std::vector<std::int32_t> mirror_;  // symmetry plane: each solid's mirror image
-  CsvSeries energy_, impact_, runup_, trap_, velocity_;
+  CsvSeries energy_, impact_, runup_, trap_, velocity_, mdbc_;
+  MdbcLimiterStats mdbc_stats_;      // set_mdbc_limiter
   bool grain_cols_ = false;          // impact_force.csv has the grains' columns
   std::vector<Vec3> barrier_grain_;  // set_barrier_grain_force
 };
@@ -647,6 +659,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
     return f;
   };
   auto write_diagnostics = [&]() {
+    if (DiagnosticWriter::limiter_stats(scene)) diag.set_mdbc_limiter(solver->mdbc_limiter_stats());
     if (coupling && scene.barrier.enabled) {  // the grains' load on each barrier wall
       const std::vector<Vec3> by_solid = solid_grain_force();
       std::vector<Vec3> f(std::size_t(std::max(scene.barrier.walls, 0)));

@@ -66,6 +66,36 @@ SPHDEM_HD SPHDEM_FLATTEN inline MdbcSums mdbc_gather(const StepParams& p, const 
   return sums;
 }
 
+// The mDBC fit of boundary slot b: the sums at its ghost node, the normal it mirrors through, and
+// the extrapolated density before the limiter and the rho0 floor. A thin solid (a barrier wall a
+// few dp thick) has fluid on either face: the particle mirrors through the face whose ghost node
+// sees more fluid.
+struct MdbcFit {
+  MdbcSums sums;
+  Vec3 normal;
+  Real rho = 0;
+};
+SPHDEM_HD inline MdbcFit mdbc_fit(const StepParams& p, const NeighborLists& nl,
+                                  const ParticleView& v, Index b) {
+  MdbcFit fit;
+  Vec3 rg = v.ghost[b];
+  fit.normal = v.normal[b];
+  fit.sums = mdbc_gather(p, nl, v, rg);
+  const Vec3 alt = v.ghost_alt[b];
+  if (!(alt.x == rg.x && alt.y == rg.y && alt.z == rg.z)) {
+    const MdbcSums other = mdbc_gather(p, nl, v, alt);
+    if (other.shepard > fit.sums.shepard) {
+      fit.sums = other;
+      rg = alt;
+      fit.normal = -fit.normal;
+    }
+  }
+  const Vec3 rb_minus_rg = p.grid.separation(v.pos[b], rg);
+  fit.rho =
+      mdbc_boundary_density(fit.sums, p.dim, rb_minus_rg, p.eos.rho0, p.mdbc_det_min, p.kernel.h);
+  return fit;
+}
+
 // mDBC: boundary density from the ghost-node interpolation over fluid, and the boundary velocity
 // for the viscous term. Boundary slots [begin, end); v.vel holds the solid's own velocity.
 // With `mine` (one flag per slot of the range), slots whose flag is 0 are zeroed instead: another
@@ -82,31 +112,39 @@ void update_mdbc(Space s, ParticleView v, NeighborLists nl, StepParams p, Index 
           v.vel_bc[b] = Vec3();
           return;
         }
-        auto gather = [&](const Vec3& rg) { return mdbc_gather(p, nl, v, rg); };
-        Vec3 rg = v.ghost[b];
-        Vec3 normal = v.normal[b];
-        MdbcSums sums = gather(rg);
-        // A thin solid (a barrier wall a few dp thick) has fluid on either face: the particle
-        // mirrors through the face whose ghost node sees more fluid.
-        const Vec3 alt = v.ghost_alt[b];
-        if (!(alt.x == rg.x && alt.y == rg.y && alt.z == rg.z)) {
-          const MdbcSums other = gather(alt);
-          if (other.shepard > sums.shepard) {
-            sums = other;
-            rg = alt;
-            normal = -normal;
-          }
-        }
-        const Vec3 rb_minus_rg = p.grid.separation(v.pos[b], rg);
-        Real rho_b =
-            mdbc_boundary_density(sums, p.dim, rb_minus_rg, p.eos.rho0, p.mdbc_det_min, p.kernel.h);
-        if (p.mdbc_limit) rho_b = mdbc_limit_density(sums, rho_b);
+        const MdbcFit fit = mdbc_fit(p, nl, v, b);
+        Real rho_b = fit.rho;
+        if (p.mdbc_limit) rho_b = mdbc_limit_density(fit.sums, rho_b);
         // Walls push, never pull: a boundary below rho0 would attract the free surface.
         if (rho_b < p.eos.rho0) rho_b = p.eos.rho0;
         v.rho[b] = rho_b;
         v.press[b] = tait_pressure(p.eos, rho_b);
-        v.vel_bc[b] = mdbc_boundary_velocity(sums, v.vel[b], normal, p.free_slip);
+        v.vel_bc[b] = mdbc_boundary_velocity(fit.sums, v.vel[b], fit.normal, p.free_slip);
       });
+}
+
+// MdbcLimiterStats (sph/mdbc.hpp) of boundary slots [begin, end), flags `mine` as in update_mdbc.
+// The walls' state is not changed. Diagnostic only: it repeats the ghost-node gathers.
+template <class Space>
+MdbcLimiterStats mdbc_limiter_stats(Space s, ParticleView v, NeighborLists nl, StepParams p,
+                                    Index begin, Index end, const std::uint8_t* mine = nullptr) {
+  MdbcLimiterStats st;
+  st.clipped = reduce<SumOp, double>(
+      s, end - begin, SPHDEM_LAMBDA(Index k) {
+        if (mine && !mine[k]) return 0.0;
+        const MdbcFit fit = mdbc_fit(p, nl, v, begin + k);
+        const Real lim = mdbc_limit_density(fit.sums, fit.rho);
+        // Only a clip that changes the wall's pressure counts: the rho0 floor hides one below.
+        const Real a = fit.rho < p.eos.rho0 ? p.eos.rho0 : fit.rho;
+        const Real b = lim < p.eos.rho0 ? p.eos.rho0 : lim;
+        return a != b ? 1.0 : 0.0;
+      });
+  st.rho_fit_max = reduce<MaxOp, Real>(
+      s, end - begin, SPHDEM_LAMBDA(Index k) {
+        if (mine && !mine[k]) return Real(0);
+        return mdbc_fit(p, nl, v, begin + k).rho;
+      });
+  return st;
 }
 
 // Velocity gradient of fluid slots [0, n) (fluid and boundary neighbours; a boundary neighbour

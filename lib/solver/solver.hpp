@@ -16,6 +16,7 @@
 #include "solver/exchange.hpp"
 #include "solver/fluid_params.hpp"
 #include "solver/particles.hpp"
+#include "sph/mdbc.hpp"
 
 namespace sphdem {
 
@@ -64,6 +65,8 @@ class SolverBase {
   virtual const PhaseTimes& phase_times() const = 0;
   // Number of neighbour pairs within 2h seen by the last force pass (for PIPS).
   virtual double last_pair_count() = 0;
+  // What the mDBC limiter does to the walls' fits now, over all ranks (mDBC only; collective).
+  virtual MdbcLimiterStats mdbc_limiter_stats() = 0;
   // Many ranks: 1 for each wall slot of host_particles() this rank owns (empty on one rank).
   virtual std::vector<std::uint8_t> wall_mine() const = 0;
   // Many ranks: steps that rebuilt the halo plan (the others reused it); 0 on one rank.

@@ -289,6 +289,19 @@ class Solver final : public SolverBase {
         });
   }
 
+  MdbcLimiterStats mdbc_limiter_stats() override {
+    MdbcLimiterStats st = sphdem::mdbc_limiter_stats(Space{}, view(), lists(), p_, ps_.wall_begin(),
+                                                     ps_.size(), ex_ ? wall_mine_.data() : nullptr);
+    if (ex_) {  // a rank without walls gives 0 for both (rho_fit_max is a density, above 0)
+      Real m[2] = {Real(st.clipped), st.rho_fit_max};
+      ex_->sum(&m[0], 1);
+      ex_->max(&m[1], 1);
+      st.clipped = double(m[0]);
+      st.rho_fit_max = m[1];
+    }
+    return st;
+  }
+
   // The steps below are public only because nvcc forbids extended lambdas in private members.
   // Pressure, mDBC, and the rates of fluid and boundary particles at the current state.
   void evaluate_rates() {

@@ -159,6 +159,15 @@ SPHDEM_HD inline Real mdbc_limit_density(const MdbcSums& s, Real rho_b) {
   return rho_b < lo ? lo : (rho_b > hi ? hi : rho_b);
 }
 
+// What the limiter does at one instant (mdbc_limiter.csv): the number of boundary particles whose
+// fit leaves the limiter's bound where it changes their pressure (above rho0), which are clipped
+// when sph.mdbc_limiter is on and would be otherwise, and the largest fitted density before the
+// limiter and the rho0 floor.
+struct MdbcLimiterStats {
+  double clipped = 0;
+  Real rho_fit_max = 0;
+};
+
 // Boundary velocity for the viscous term: mirror of the ghost node's Shepard velocity about the
 // wall velocity. No-slip: v_B = 2 v_wall - v_G. Free-slip: only the normal part is mirrored.
 SPHDEM_HD inline Vec3 mdbc_boundary_velocity(const MdbcSums& s, const Vec3& v_wall,
