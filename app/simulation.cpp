@@ -429,7 +429,9 @@ class DiagnosticWriter {
                    e.momentum.z});
     }
     if (scene_.barrier.enabled) write_barrier(t, ps, p);
-    if (limiter_stats(scene_)) mdbc_.row({t, mdbc_stats_.clipped, mdbc_stats_.rho_fit_max});
+    // No row before the run's (or restart's) first step: the solver has no cell lists yet.
+    if (limiter_stats(scene_) && !std::isnan(mdbc_stats_.clipped))
+      mdbc_.row({t, mdbc_stats_.clipped, mdbc_stats_.rho_fit_max});
   }
 
   // impact_force.csv: the fluid force on each barrier wall, its component along the channel (x)

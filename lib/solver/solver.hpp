@@ -66,6 +66,7 @@ class SolverBase {
   // Number of neighbour pairs within 2h seen by the last force pass (for PIPS).
   virtual double last_pair_count() = 0;
   // What the mDBC limiter does to the walls' fits now, over all ranks (mDBC only; collective).
+  // NaN before the first step and after restore(), when there are no cell lists to gather with.
   virtual MdbcLimiterStats mdbc_limiter_stats() = 0;
   // Many ranks: 1 for each wall slot of host_particles() this rank owns (empty on one rank).
   virtual std::vector<std::uint8_t> wall_mine() const = 0;

@@ -123,6 +123,7 @@ class Solver final : public SolverBase {
       follow(leaf_at_, halo_cells_);
       clock_.add(times_.halo, t1, tick());
     }
+    lists_ready_ = true;
 
     const bool symplectic = scene_.time.integrator == Integrator::kSymplectic;
     evaluate_rates();
@@ -186,6 +187,7 @@ class Solver final : public SolverBase {
   // Takes a new particle set (construction and restart): ids, scratch sizes, the wall list.
   void adopt(ParticleSet<Host> particles) {
     host_valid_ = false;
+    lists_ready_ = false;
     GlobalId max_id = 0;
     for (Index i = 0; i < particles.size(); ++i) max_id = std::max(max_id, particles.id[i]);
     Real m = Real(max_id) + 1;
@@ -290,6 +292,10 @@ class Solver final : public SolverBase {
   }
 
   MdbcLimiterStats mdbc_limiter_stats() override {
+    if (!lists_ready_) {  // before the first step, or after a restore: no cell lists yet
+      const double nan = std::numeric_limits<double>::quiet_NaN();
+      return MdbcLimiterStats{nan, Real(nan)};
+    }
     MdbcLimiterStats st = sphdem::mdbc_limiter_stats(Space{}, view(), lists(), p_, ps_.wall_begin(),
                                                      ps_.size(), ex_ ? wall_mine_.data() : nullptr);
     if (ex_) {  // a rank without walls gives 0 for both (rho_fit_max is a density, above 0)
@@ -1073,6 +1079,7 @@ class Solver final : public SolverBase {
   std::shared_ptr<Exchange> ex_;
   CellList<Space> fluid_cells_, boundary_cells_, halo_cells_, grain_cells_;
   Buffer<std::uint8_t, Space> wall_mine_;
+  bool lists_ready_ = false;  // the cell lists match the slots (set by step(), cleared by adopt())
   Buffer<std::uint32_t, Space> root_at_, leaf_at_;  // current owned/halo slot -> plan root/leaf
   Buffer<std::uint32_t, Space> follow_scratch_;
   Buffer<std::uint32_t, Space> wall_roots_, wall_leaves_;  // the wall plan's slots (from wall 0)
