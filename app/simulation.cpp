@@ -304,7 +304,8 @@ class DiagnosticWriter {
       profile_.emplace_back(path(g.name), profile_columns(g), append, keep_before);
     }
     if (limiter_stats(s))
-      mdbc_.open(path("mdbc_limiter"), {"t", "clipped", "rho_fit_max"}, append, keep_before);
+      mdbc_.open(path("mdbc_limiter"), {"t", "clipped", "rho_fit_max", "rho_cut_max"}, append,
+                 keep_before);
     if (d.energy)
       energy_.open(path("energy"), {"t", "kinetic", "potential", "total", "px", "py", "pz"}, append,
                    keep_before);
@@ -431,7 +432,7 @@ class DiagnosticWriter {
     if (scene_.barrier.enabled) write_barrier(t, ps, p);
     // No row before the run's (or restart's) first step: the solver has no cell lists yet.
     if (limiter_stats(scene_) && !std::isnan(mdbc_stats_.clipped))
-      mdbc_.row({t, mdbc_stats_.clipped, mdbc_stats_.rho_fit_max});
+      mdbc_.row({t, mdbc_stats_.clipped, mdbc_stats_.rho_fit_max, mdbc_stats_.rho_cut_max});
   }
 
   // impact_force.csv: the fluid force on each barrier wall, its component along the channel (x)

@@ -188,6 +188,19 @@ def summarize(run_dir, until=float("inf")):
         grains_up = tr[-1][3]
     if tr and len(tr[-1]) > 4:  # older trap.csv files stop at grains_upstream
         grains_down = tr[-1][4]
+    # mdbc_limiter.csv (mDBC with a barrier): the most wall particles the limiter clipped (or,
+    # with it off, would have clipped) at one sample, the largest fitted wall density, and the
+    # largest change it makes (or would make) to one (files of older runs lack that column).
+    clips_max = fit_max = cut_max = float("nan")
+    mpath = os.path.join(run_dir, "mdbc_limiter.csv")
+    if os.path.exists(mpath):
+        _, ml = read_csv(mpath)
+        ml = [r for r in ml if r[0] <= until]
+        if ml:
+            clips_max = max(r[1] for r in ml)
+            fit_max = max(r[2] for r in ml)
+            if len(ml[0]) > 3:
+                cut_max = max(r[3] for r in ml)
     # Wall time and steps of the whole run (summary.json; absent while a run is going).
     wall_s, steps = float("nan"), float("nan")
     try:
@@ -201,6 +214,9 @@ def summarize(run_dir, until=float("inf")):
         "grains_downstream": grains_down,
         "wall_s": wall_s,
         "steps": steps,
+        "limiter_clips_max": clips_max,
+        "wall_fit_max": fit_max,
+        "wall_cut_max": cut_max,
         "front_speed": speed,
         "t_end": t[-1] if t else 0.0,
         "peak_force_mid": f_mid[k] if rows else 0.0,
@@ -304,7 +320,7 @@ def main():
             "static_grain_mid", "static_grain_total", "peak_grain_total_50ms",
             "peak_mid_with_grains_50ms", "static_mid_with_grains", "max_runup", "trap_ratio",
             "upstream_of_total", "grains_upstream", "grains_downstream", "front_speed", "t_end",
-            "steps", "wall_s", "finished"]
+            "limiter_clips_max", "wall_fit_max", "wall_cut_max", "steps", "wall_s", "finished"]
     write_table(os.path.join(a.out, "summary"), cols, results)
     try:
         import matplotlib

@@ -144,6 +144,15 @@ MdbcLimiterStats mdbc_limiter_stats(Space s, ParticleView v, NeighborLists nl, S
         if (mine && !mine[k]) return Real(0);
         return mdbc_fit(p, nl, v, begin + k).rho;
       });
+  st.rho_cut_max = reduce<MaxOp, Real>(
+      s, end - begin, SPHDEM_LAMBDA(Index k) {
+        if (mine && !mine[k]) return Real(0);
+        const MdbcFit fit = mdbc_fit(p, nl, v, begin + k);
+        const Real lim = mdbc_limit_density(fit.sums, fit.rho);
+        const Real a = fit.rho < p.eos.rho0 ? p.eos.rho0 : fit.rho;
+        const Real b = lim < p.eos.rho0 ? p.eos.rho0 : lim;
+        return a > b ? a - b : b - a;
+      });
   return st;
 }
 

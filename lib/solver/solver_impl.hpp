@@ -294,16 +294,17 @@ class Solver final : public SolverBase {
   MdbcLimiterStats mdbc_limiter_stats() override {
     if (!lists_ready_) {  // before the first step, or after a restore: no cell lists yet
       const double nan = std::numeric_limits<double>::quiet_NaN();
-      return MdbcLimiterStats{nan, Real(nan)};
+      return MdbcLimiterStats{nan, Real(nan), Real(nan)};
     }
     MdbcLimiterStats st = sphdem::mdbc_limiter_stats(Space{}, view(), lists(), p_, ps_.wall_begin(),
                                                      ps_.size(), ex_ ? wall_mine_.data() : nullptr);
-    if (ex_) {  // a rank without walls gives 0 for both (rho_fit_max is a density, above 0)
-      Real m[2] = {Real(st.clipped), st.rho_fit_max};
+    if (ex_) {  // a rank without walls gives 0 for each (both maxima are at least 0)
+      Real m[3] = {Real(st.clipped), st.rho_fit_max, st.rho_cut_max};
       ex_->sum(&m[0], 1);
-      ex_->max(&m[1], 1);
+      ex_->max(&m[1], 2);
       st.clipped = double(m[0]);
       st.rho_fit_max = m[1];
+      st.rho_cut_max = m[2];
     }
     return st;
   }

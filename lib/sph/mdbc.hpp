@@ -161,11 +161,13 @@ SPHDEM_HD inline Real mdbc_limit_density(const MdbcSums& s, Real rho_b) {
 
 // What the limiter does at one instant (mdbc_limiter.csv): the number of boundary particles whose
 // fit leaves the limiter's bound where it changes their pressure (above rho0), which are clipped
-// when sph.mdbc_limiter is on and would be otherwise, and the largest fitted density before the
-// limiter and the rho0 floor.
+// when sph.mdbc_limiter is on and would be otherwise; the largest fitted density before the
+// limiter and the rho0 floor; and the largest change the limiter makes (or would make) to a wall
+// density, floors applied.
 struct MdbcLimiterStats {
   double clipped = 0;
   Real rho_fit_max = 0;
+  Real rho_cut_max = 0;
 };
 
 // Boundary velocity for the viscous term: mirror of the ghost node's Shepard velocity about the
