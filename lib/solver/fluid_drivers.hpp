@@ -132,12 +132,9 @@ MdbcLimiterStats mdbc_limiter_stats(Space s, ParticleView v, NeighborLists nl, S
   st.clipped = reduce<SumOp, double>(
       s, end - begin, SPHDEM_LAMBDA(Index k) {
         if (mine && !mine[k]) return 0.0;
-        const MdbcFit fit = mdbc_fit(p, nl, v, begin + k);
-        const Real lim = mdbc_limit_density(fit.sums, fit.rho);
         // Only a clip that changes the wall's pressure counts: the rho0 floor hides one below.
-        const Real a = fit.rho < p.eos.rho0 ? p.eos.rho0 : fit.rho;
-        const Real b = lim < p.eos.rho0 ? p.eos.rho0 : lim;
-        return a != b ? 1.0 : 0.0;
+        const MdbcFit fit = mdbc_fit(p, nl, v, begin + k);
+        return mdbc_limiter_cut(fit.sums, fit.rho, p.eos.rho0) != Real(0) ? 1.0 : 0.0;
       });
   st.rho_fit_max = reduce<MaxOp, Real>(
       s, end - begin, SPHDEM_LAMBDA(Index k) {
@@ -148,10 +145,7 @@ MdbcLimiterStats mdbc_limiter_stats(Space s, ParticleView v, NeighborLists nl, S
       s, end - begin, SPHDEM_LAMBDA(Index k) {
         if (mine && !mine[k]) return Real(0);
         const MdbcFit fit = mdbc_fit(p, nl, v, begin + k);
-        const Real lim = mdbc_limit_density(fit.sums, fit.rho);
-        const Real a = fit.rho < p.eos.rho0 ? p.eos.rho0 : fit.rho;
-        const Real b = lim < p.eos.rho0 ? p.eos.rho0 : lim;
-        return a > b ? a - b : b - a;
+        return mdbc_limiter_cut(fit.sums, fit.rho, p.eos.rho0);
       });
   return st;
 }

@@ -159,6 +159,14 @@ SPHDEM_HD inline Real mdbc_limit_density(const MdbcSums& s, Real rho_b) {
   return rho_b < lo ? lo : (rho_b > hi ? hi : rho_b);
 }
 
+// How far the limiter moves a fitted wall density `fit` once both sides take the rho0 floor
+// (0 where it leaves the wall's pressure alone).
+SPHDEM_HD inline Real mdbc_limiter_cut(const MdbcSums& s, Real fit, Real rho0) {
+  const Real lim = mdbc_limit_density(s, fit);
+  const Real a = fit < rho0 ? rho0 : fit, b = lim < rho0 ? rho0 : lim;
+  return a > b ? a - b : b - a;
+}
+
 // What the limiter does at one instant (mdbc_limiter.csv): the number of boundary particles whose
 // fit leaves the limiter's bound where it changes their pressure (above rho0), which are clipped
 // when sph.mdbc_limiter is on and would be otherwise; the largest fitted density before the
