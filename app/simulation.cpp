@@ -169,8 +169,13 @@ std::unique_ptr<SolverBase> make_solver(
                          ": domain.periodic: a periodic axis runs on one rank only "
                          "for now (this run has " +
                          std::to_string(nranks) + " ranks)");
+    // The halo: the kernel's reach plus the skin, and with mDBC the largest distance between a
+    // wall particle's two ghost nodes. The rank owning the first ghost node gathers at both (the
+    // fit takes the one that sees more fluid); a halo short of the second gave the V30 barrier
+    // a 2e-5 difference from one rank within 8 steps (tests/mpi: MdbcLimiterStats...).
+    const Real spread = p.mdbc ? rep.ghost_spread : Real(0);
     auto ex = std::make_shared<MpiExchange>(MPI_COMM_WORLD, p.grid, procs,
-                                            (Real(2.02) + scene.parallel.skin) * p.h,
+                                            (Real(2.02) + scene.parallel.skin) * p.h + spread,
                                             scene.parallel.imbalance);
     keep_owned_fluid(*ex, ps);
     ex->rebalance(ps);  // boxes from the initial histogram (DMSwarm moves the fluid)
@@ -217,7 +222,9 @@ std::unique_ptr<SolverBase> make_solver(
         for (std::size_t i = 1; i + 1 < st.size(); ++i)
           cuts << " " << p.grid.lo[k] + Real(st[i]) * p.grid.cell[k];
       }
-      log << "boxes:" << cuts.str() << " m\n";
+      log << "boxes:" << cuts.str() << " m; halo " << ex->width() << " m";
+      if (spread > 0) log << " (" << spread << " m of it for the mDBC walls' second ghost nodes)";
+      log << "\n";
     }
     log << "backend: host, " << host_thread_count() << " OpenMP threads per rank, " << nranks
         << " ranks as " << pr[0] << " x " << pr[1] << " x " << pr[2]
@@ -304,8 +311,10 @@ class DiagnosticWriter {
       profile_.emplace_back(path(g.name), profile_columns(g), append, keep_before);
     }
     if (limiter_stats(s))
-      mdbc_.open(path("mdbc_limiter"), {"t", "clipped", "rho_fit_max", "rho_cut_max"}, append,
-                 keep_before);
+      mdbc_.open(path("mdbc_limiter"),
+                 {"t", "clipped", "rho_fit_max", "rho_cut_max", "clip_x_lo", "clip_x_hi", "cut_x",
+                  "cut_y", "cut_z"},
+                 append, keep_before);
     if (d.energy)
       energy_.open(path("energy"), {"t", "kinetic", "potential", "total", "px", "py", "pz"}, append,
                    keep_before);
@@ -432,7 +441,9 @@ class DiagnosticWriter {
     if (scene_.barrier.enabled) write_barrier(t, ps, p);
     // No row before the run's (or restart's) first step: the solver has no cell lists yet.
     if (limiter_stats(scene_) && !std::isnan(mdbc_stats_.clipped))
-      mdbc_.row({t, mdbc_stats_.clipped, mdbc_stats_.rho_fit_max, mdbc_stats_.rho_cut_max});
+      mdbc_.row({t, mdbc_stats_.clipped, mdbc_stats_.rho_fit_max, mdbc_stats_.rho_cut_max,
+                 mdbc_stats_.clip_x_lo, mdbc_stats_.clip_x_hi, mdbc_stats_.cut_at.x,
+                 mdbc_stats_.cut_at.y, mdbc_stats_.cut_at.z});
   }
 
   // impact_force.csv: the fluid force on each barrier wall, its component along the channel (x)

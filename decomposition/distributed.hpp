@@ -33,6 +33,7 @@ class MpiExchange final : public Exchange {
               double imbalance);
 
   const DomainDecomposition& decomposition() const { return dd_; }
+  Real width() const { return width_; }  // the halo reach
   MPI_Comm comm() const { return dd_.comm(); }
 
   int rank() const override { return dd_.rank(); }

@@ -263,16 +263,15 @@ ParticleSet<Host> build_particles(const Scene& scene, BuildReport* report,
       ++thin_count[s];
     }
     const Vec3 ghost = x + n * (Real(2) * depth_x);
+    const Vec3 alt = searched ? alt_ghost : (!dry && far < depth ? x - n * (Real(2) * far) : ghost);
+    rep.ghost_spread = std::max(rep.ghost_spread, norm(alt - ghost));
     ++by_solid[std::size_t(which)];
     const Index number = walls_made++;
     if (keep_wall && !keep_wall(x, ghost)) return;
     bnumber.push_back(number);
     bpos.push_back(x);
     bghost.push_back(ghost);
-    if (searched)
-      balt.push_back(alt_ghost);
-    else
-      balt.push_back(!dry && far < depth ? x - n * (Real(2) * far) : bghost.back());
+    balt.push_back(alt);
     bnormal.push_back(n);
     bbody.push_back(which);
   });

@@ -25,6 +25,10 @@ struct BuildReport {
   Index fluid = 0, wall = 0, grain = 0;
   Real fluid_height = 0;  // largest fluid depth along gravity, for c0
   Real boundary_depth = 0;
+  // The largest distance between a wall particle's two mDBC ghost nodes (ghost, ghost_alt): a
+  // thin solid's two faces, or a corner's two walls. On many ranks the halo reaches this much
+  // farther, so that the rank owning a particle's ghost node holds the fluid around both.
+  Real ghost_spread = 0;
   std::vector<ThinSolid> thin;       // in scene order
   std::vector<Index> wall_by_solid;  // boundary particles of each solid, in scene order
   // Symmetry plane (scene.symmetry): fluid and walls dropped on the mirrored side, and the wall

@@ -123,31 +123,69 @@ void update_mdbc(Space s, ParticleView v, NeighborLists nl, StepParams p, Index 
       });
 }
 
-// MdbcLimiterStats (sph/mdbc.hpp) of boundary slots [begin, end), flags `mine` as in update_mdbc.
-// The walls' state is not changed. Diagnostic only: it repeats the ghost-node gathers.
+// The fitted density and the limiter's cut (mdbc_limiter_cut) of each boundary slot of
+// [begin, end), into fit[k] and cut[k] for slot begin + k: 0 and 0 where `mine` (as in
+// update_mdbc) is 0. The walls' state is not changed. Diagnostic only: it repeats the ghost-node
+// gathers once.
 template <class Space>
-MdbcLimiterStats mdbc_limiter_stats(Space s, ParticleView v, NeighborLists nl, StepParams p,
-                                    Index begin, Index end, const std::uint8_t* mine = nullptr) {
+void mdbc_limiter_cuts(Space s, ParticleView v, NeighborLists nl, StepParams p, Index begin,
+                       Index end, Real* fit, Real* cut, const std::uint8_t* mine = nullptr) {
+  for_each_uneven(
+      s, end - begin, SPHDEM_LAMBDA(Index k) {
+        if (mine && !mine[k]) {
+          fit[k] = 0;
+          cut[k] = 0;
+          return;
+        }
+        const MdbcFit f = mdbc_fit(p, nl, v, begin + k);
+        fit[k] = f.rho;
+        cut[k] = mdbc_limiter_cut(f.sums, f.rho, p.eos.rho0);
+      });
+}
+
+// This rank's MdbcLimiterStats (sph/mdbc.hpp) of n boundary slots from `begin`, from
+// mdbc_limiter_cuts' fit and cut. Only a clip that changes the wall's pressure counts (a cut
+// past round-off, mdbc_cut_is_clip: the rho0 floor hides one below it). Without a clip here the x
+// range is
+// (+max, lowest) and cut_at stays NaN: mdbc_cut_position finds it once the ranks agree on the
+// largest cut.
+template <class Space>
+MdbcLimiterStats mdbc_limiter_reduce(Space s, const Vec3* pos, Index begin, Index n,
+                                     const Real* fit, const Real* cut, Real rho0) {
   MdbcLimiterStats st;
   st.clipped = reduce<SumOp, double>(
-      s, end - begin, SPHDEM_LAMBDA(Index k) {
-        if (mine && !mine[k]) return 0.0;
-        // Only a clip that changes the wall's pressure counts: the rho0 floor hides one below.
-        const MdbcFit fit = mdbc_fit(p, nl, v, begin + k);
-        return mdbc_limiter_cut(fit.sums, fit.rho, p.eos.rho0) != Real(0) ? 1.0 : 0.0;
-      });
+      s, n, SPHDEM_LAMBDA(Index k) { return mdbc_cut_is_clip(cut[k], rho0) ? 1.0 : 0.0; });
   st.rho_fit_max = reduce<MaxOp, Real>(
-      s, end - begin, SPHDEM_LAMBDA(Index k) {
-        if (mine && !mine[k]) return Real(0);
-        return mdbc_fit(p, nl, v, begin + k).rho;
-      });
+      s, n, SPHDEM_LAMBDA(Index k) { return fit[k]; });
   st.rho_cut_max = reduce<MaxOp, Real>(
-      s, end - begin, SPHDEM_LAMBDA(Index k) {
-        if (mine && !mine[k]) return Real(0);
-        const MdbcFit fit = mdbc_fit(p, nl, v, begin + k);
-        return mdbc_limiter_cut(fit.sums, fit.rho, p.eos.rho0);
+      s, n, SPHDEM_LAMBDA(Index k) { return cut[k]; });
+  st.clip_x_lo = reduce<MinOp, Real>(
+      s, n, SPHDEM_LAMBDA(Index k) {
+        return mdbc_cut_is_clip(cut[k], rho0) ? pos[begin + k].x : MinOp::identity<Real>();
+      });
+  st.clip_x_hi = reduce<MaxOp, Real>(
+      s, n, SPHDEM_LAMBDA(Index k) {
+        return mdbc_cut_is_clip(cut[k], rho0) ? pos[begin + k].x : MaxOp::identity<Real>();
       });
   return st;
+}
+
+// Where the cut equals cut_max (> 0): the position of the first such slot of this rank, or
+// (lowest, lowest, lowest) if this rank has none, so that a maximum over the ranks picks it.
+template <class Space>
+Vec3 mdbc_cut_position(Space s, const Vec3* pos, Index begin, Index n, const Real* cut,
+                       Real cut_max) {
+  const Real none = MaxOp::identity<Real>();
+  const double first = reduce<MinOp, double>(
+      s, n,
+      SPHDEM_LAMBDA(Index k) { return cut[k] == cut_max ? double(k) : MinOp::identity<double>(); });
+  if (!(cut_max > Real(0)) || first == MinOp::identity<double>()) return Vec3(none, none, none);
+  const Index at = Index(first);
+  Vec3 r;
+  for (int c = 0; c < 3; ++c)
+    r[c] = reduce<MaxOp, Real>(
+        s, 1, SPHDEM_LAMBDA(Index) { return pos[begin + at][c]; });
+  return r;
 }
 
 // Velocity gradient of fluid slots [0, n) (fluid and boundary neighbours; a boundary neighbour

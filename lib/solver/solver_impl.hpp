@@ -294,18 +294,48 @@ class Solver final : public SolverBase {
   MdbcLimiterStats mdbc_limiter_stats() override {
     if (!lists_ready_) {  // before the first step, or after a restore: no cell lists yet
       const double nan = std::numeric_limits<double>::quiet_NaN();
-      return MdbcLimiterStats{nan, Real(nan), Real(nan)};
+      MdbcLimiterStats st;
+      st.clipped = nan;
+      st.rho_fit_max = st.rho_cut_max = Real(nan);
+      return st;
     }
-    MdbcLimiterStats st = sphdem::mdbc_limiter_stats(Space{}, view(), lists(), p_, ps_.wall_begin(),
-                                                     ps_.size(), ex_ ? wall_mine_.data() : nullptr);
-    if (ex_) {  // a rank without walls gives 0 for each (both maxima are at least 0)
-      Real m[3] = {Real(st.clipped), st.rho_fit_max, st.rho_cut_max};
+    // The halo copies (other ranks' fluid, or the symmetry plane's mirror images) still hold the
+    // state from before this step's update: refreshed as the next step would, the fits see what
+    // one rank would.
+    refresh_halo(ps_.pos, true);
+    refresh_halo(ps_.vel, false, HaloField::kVelocity);
+    refresh_halo(ps_.rho);
+    const Index b = ps_.wall_begin(), n = ps_.size() - b;
+    limiter_fit_.resize(std::size_t(n));
+    limiter_cut_.resize(std::size_t(n));
+    ParticleView v = view();
+    mdbc_limiter_cuts(Space{}, v, lists(), p_, b, ps_.size(), limiter_fit_.data(),
+                      limiter_cut_.data(), ex_ ? wall_mine_.data() : nullptr);
+    MdbcLimiterStats st = mdbc_limiter_reduce(Space{}, v.pos, b, n, limiter_fit_.data(),
+                                              limiter_cut_.data(), p_.eos.rho0);
+    if (ex_) {  // a rank without walls gives 0 for each of the sum and the two maxima
+      Real m[5] = {Real(st.clipped), st.rho_fit_max, st.rho_cut_max, st.clip_x_hi, -st.clip_x_lo};
       ex_->sum(&m[0], 1);
-      ex_->max(&m[1], 2);
+      ex_->max(&m[1], 4);
       st.clipped = double(m[0]);
       st.rho_fit_max = m[1];
       st.rho_cut_max = m[2];
+      st.clip_x_hi = m[3];
+      st.clip_x_lo = -m[4];
     }
+    const Real nan = std::numeric_limits<Real>::quiet_NaN();
+    if (!(st.clipped > 0)) {
+      st.clip_x_lo = st.clip_x_hi = nan;
+      return st;
+    }
+    // The largest cut is on one rank (an exact tie between two ranks would mix their positions).
+    Vec3 at = mdbc_cut_position(Space{}, v.pos, b, n, limiter_cut_.data(), st.rho_cut_max);
+    if (ex_) {
+      Real m[3] = {at.x, at.y, at.z};
+      ex_->max(m, 3);
+      at = Vec3(m[0], m[1], m[2]);
+    }
+    st.cut_at = at;
     return st;
   }
 
@@ -1080,6 +1110,7 @@ class Solver final : public SolverBase {
   std::shared_ptr<Exchange> ex_;
   CellList<Space> fluid_cells_, boundary_cells_, halo_cells_, grain_cells_;
   Buffer<std::uint8_t, Space> wall_mine_;
+  Buffer<Real, Space> limiter_fit_, limiter_cut_;  // mdbc_limiter_stats' scratch, one per wall
   bool lists_ready_ = false;  // the cell lists match the slots (set by step(), cleared by adopt())
   Buffer<std::uint32_t, Space> root_at_, leaf_at_;  // current owned/halo slot -> plan root/leaf
   Buffer<std::uint32_t, Space> follow_scratch_;

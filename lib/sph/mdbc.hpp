@@ -14,6 +14,8 @@
 // no-slip reverses it, free-slip reverses only its normal component.
 #pragma once
 
+#include <limits>
+
 #include "core/hd.hpp"
 #include "core/types.hpp"
 
@@ -167,15 +169,30 @@ SPHDEM_HD inline Real mdbc_limiter_cut(const MdbcSums& s, Real fit, Real rho0) {
   return a > b ? a - b : b - a;
 }
 
+// Whether a cut counts as a clip in mdbc_limiter.csv: above a millionth of rho0. Where the fluid
+// at the ghost node has one density (lo = hi), the bound is that density, and the fit's
+// round-off passes it by 1e-13 to 1e-10 kg/m^3; such cuts are not clips, and their number
+// differs with the rank count. A cut below 1e-6 rho0 moves the wall pressure by under
+// 1e-6 rho0 c0^2 (1.2 Pa for the flume's debris at c0 = 30 m/s).
+SPHDEM_HD inline bool mdbc_cut_is_clip(Real cut, Real rho0) {
+  return cut > Real(1e-6) * rho0;
+}
+
 // What the limiter does at one instant (mdbc_limiter.csv): the number of boundary particles whose
-// fit leaves the limiter's bound where it changes their pressure (above rho0), which are clipped
+// fit leaves the limiter's bound where it changes their pressure (above rho0, by more than
+// round-off: mdbc_cut_is_clip), which are clipped
 // when sph.mdbc_limiter is on and would be otherwise; the largest fitted density before the
 // limiter and the rho0 floor; and the largest change the limiter makes (or would make) to a wall
-// density, floors applied.
+// density, floors applied. Where it acts: the range along x of the clipped particles, and the
+// position of the largest cut (NaN without a clip).
 struct MdbcLimiterStats {
   double clipped = 0;
   Real rho_fit_max = 0;
   Real rho_cut_max = 0;
+  Real clip_x_lo = std::numeric_limits<Real>::quiet_NaN();
+  Real clip_x_hi = std::numeric_limits<Real>::quiet_NaN();
+  Vec3 cut_at{std::numeric_limits<Real>::quiet_NaN(), std::numeric_limits<Real>::quiet_NaN(),
+              std::numeric_limits<Real>::quiet_NaN()};
 };
 
 // Boundary velocity for the viscous term: mirror of the ghost node's Shepard velocity about the

@@ -1,6 +1,7 @@
 // mdbc_limiter.csv's numbers (solver mdbc_limiter_stats): the count of wall particles whose mDBC
-// fit the limiter clips, and the largest fitted density, against a brute-force loop over every
-// fluid particle on the flume (thin barrier walls that mirror through either face).
+// fit the limiter clips, the largest fitted density and cut, and where the clips are, against a
+// brute-force loop over every fluid particle on the flume (thin barrier walls that mirror through
+// either face).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -49,8 +50,16 @@ MdbcLimiterStats brute_stats(const ParticleSet<Host>& ps, const StepParams& p) {
         mdbc_boundary_density(s, p.dim, ps.pos[b] - rg, p.eos.rho0, p.mdbc_det_min, p.kernel.h);
     const Real lim = mdbc_limit_density(s, fit);
     const Real cut = std::abs(std::max(fit, p.eos.rho0) - std::max(lim, p.eos.rho0));
-    if (cut != 0) st.clipped += 1;
-    st.rho_cut_max = std::max(st.rho_cut_max, cut);
+    if (mdbc_cut_is_clip(cut, p.eos.rho0)) {
+      const Real x = ps.pos[b].x;
+      st.clip_x_lo = st.clipped == 0 ? x : std::min(st.clip_x_lo, x);
+      st.clip_x_hi = st.clipped == 0 ? x : std::max(st.clip_x_hi, x);
+      st.clipped += 1;
+    }
+    if (cut > st.rho_cut_max) {
+      st.rho_cut_max = cut;
+      st.cut_at = ps.pos[b];
+    }
     st.rho_fit_max = std::max(st.rho_fit_max, fit);
   }
   return st;
@@ -75,6 +84,17 @@ void expect_stats_match(SolverBase& solver) {
   EXPECT_EQ(got.clipped, want.clipped);
   EXPECT_NEAR(double(got.rho_fit_max), double(want.rho_fit_max), 1e-9 * double(want.rho_fit_max));
   EXPECT_NEAR(double(got.rho_cut_max), double(want.rho_cut_max), 1e-9 * double(want.rho_fit_max));
+  // Where: exact positions (NaN, which compares unequal, when nothing is clipped).
+  if (want.clipped == 0) {
+    EXPECT_TRUE(std::isnan(got.clip_x_lo) && std::isnan(got.clip_x_hi));
+    EXPECT_TRUE(std::isnan(got.cut_at.x) && std::isnan(got.cut_at.y) && std::isnan(got.cut_at.z));
+    return;
+  }
+  EXPECT_EQ(got.clip_x_lo, want.clip_x_lo);
+  EXPECT_EQ(got.clip_x_hi, want.clip_x_hi);
+  EXPECT_EQ(got.cut_at.x, want.cut_at.x);
+  EXPECT_EQ(got.cut_at.y, want.cut_at.y);
+  EXPECT_EQ(got.cut_at.z, want.cut_at.z);
 }
 
 TEST(MdbcLimiterStats, NoClipsInFluidAtRestAndTheBruteForceCountOnceTheDensityIsRough) {
@@ -103,8 +123,12 @@ TEST(MdbcLimiterStats, NoClipsInFluidAtRestAndTheBruteForceCountOnceTheDensityIs
     EXPECT_GT(solver->mdbc_limiter_stats().clipped, 0);
     const MdbcLimiterStats st = solver->mdbc_limiter_stats();
     EXPECT_GT(st.rho_cut_max, 0);
-    std::printf("flume rough: %g clipped, largest fit %g, largest cut %g\n", st.clipped,
-                double(st.rho_fit_max), double(st.rho_cut_max));
+    EXPECT_LT(st.clip_x_lo, st.clip_x_hi);
+    std::printf(
+        "flume rough: %g clipped over x in [%g, %g], largest fit %g, largest cut %g at "
+        "(%g, %g, %g)\n",
+        st.clipped, double(st.clip_x_lo), double(st.clip_x_hi), double(st.rho_fit_max),
+        double(st.rho_cut_max), double(st.cut_at.x), double(st.cut_at.y), double(st.cut_at.z));
   }
 }
 
