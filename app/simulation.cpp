@@ -172,7 +172,7 @@ std::unique_ptr<SolverBase> make_solver(
     // The halo: the kernel's reach plus the skin, and with mDBC the largest distance between a
     // wall particle's two ghost nodes. The rank owning the first ghost node gathers at both (the
     // fit takes the one that sees more fluid); a halo short of the second gave the V30 barrier
-    // a 2e-5 difference from one rank within 8 steps (tests/mpi: MdbcLimiterStats...).
+    // a 2e-5 difference from one rank within 8 steps (DistributedRun.ThinBarrierWalls...).
     const Real spread = p.mdbc ? rep.ghost_spread : Real(0);
     auto ex = std::make_shared<MpiExchange>(MPI_COMM_WORLD, p.grid, procs,
                                             (Real(2.02) + scene.parallel.skin) * p.h + spread,

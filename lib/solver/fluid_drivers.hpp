@@ -145,10 +145,9 @@ void mdbc_limiter_cuts(Space s, ParticleView v, NeighborLists nl, StepParams p, 
 
 // This rank's MdbcLimiterStats (sph/mdbc.hpp) of n boundary slots from `begin`, from
 // mdbc_limiter_cuts' fit and cut. Only a clip that changes the wall's pressure counts (a cut
-// past round-off, mdbc_cut_is_clip: the rho0 floor hides one below it). Without a clip here the x
-// range is
-// (+max, lowest) and cut_at stays NaN: mdbc_cut_position finds it once the ranks agree on the
-// largest cut.
+// past round-off, mdbc_cut_is_clip: the rho0 floor hides one below it). Without a clip here the
+// x range is (+max, lowest), which the ranks' min and max pass over. cut_at stays NaN:
+// mdbc_cut_position finds it once the ranks agree on the largest cut.
 template <class Space>
 MdbcLimiterStats mdbc_limiter_reduce(Space s, const Vec3* pos, Index begin, Index n,
                                      const Real* fit, const Real* cut, Real rho0) {

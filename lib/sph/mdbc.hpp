@@ -180,8 +180,8 @@ SPHDEM_HD inline bool mdbc_cut_is_clip(Real cut, Real rho0) {
 
 // What the limiter does at one instant (mdbc_limiter.csv): the number of boundary particles whose
 // fit leaves the limiter's bound where it changes their pressure (above rho0, by more than
-// round-off: mdbc_cut_is_clip), which are clipped
-// when sph.mdbc_limiter is on and would be otherwise; the largest fitted density before the
+// round-off: mdbc_cut_is_clip), which are clipped when sph.mdbc_limiter is on and would be
+// otherwise; the largest fitted density before the
 // limiter and the rho0 floor; and the largest change the limiter makes (or would make) to a wall
 // density, floors applied. Where it acts: the range along x of the clipped particles, and the
 // position of the largest cut (NaN without a clip).
