@@ -347,9 +347,12 @@ class DiagnosticWriter {
     }
   }
   // mdbc_limiter.csv: what the mDBC density limiter does (clips, or would clip with it off) at
-  // each diagnostic time; written where it can act, mDBC walls with a barrier or the limiter on.
+  // each diagnostic time; written where the wall loads are measured or the limiter is on: mDBC
+  // walls with a barrier, a force probe (diagnostics.forces) or the limiter. With it off the
+  // file says where the limiter would act (docs/VALIDATION.md compares the two on a thin plate).
   static bool limiter_stats(const Scene& s) {
-    return s.sph.boundary == BoundaryMethod::kMdbc && (s.barrier.enabled || s.sph.mdbc_limiter);
+    return s.sph.boundary == BoundaryMethod::kMdbc &&
+           (s.barrier.enabled || s.sph.mdbc_limiter || !s.diagnostics.forces.empty());
   }
   // The limiter's effect for the next write (collective: every rank computes it).
   void set_mdbc_limiter(const MdbcLimiterStats& st) { mdbc_stats_ = st; }

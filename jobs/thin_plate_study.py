@@ -14,7 +14,9 @@ mean, as the flume studies), its impulse (the integral of that force), its mean 
 last 0.1 s, and the largest elevation at the gauge 10 mm upstream of the plate. The differences
 are taken against the finest run with the limiter off (the finest "on" run is in the table, so
 the two references can be compared). A run that stopped early (a guard) is listed with the
-time and message and left out of the differences. Writes OUT/thin_plate_study.{csv,md} and,
+time and message and left out of the differences. --spread-cfl runs each case at --spread-dps
+again with other CFL numbers: a different step sequence, the same physics, so the scatter of
+those runs is the run-to-run spread that the flow's chaos gives at that dp (small markers). Writes OUT/thin_plate_study.{csv,md} and,
 with matplotlib, OUT/thin_plate_study.png (difference against wall time, log axes).
 """
 import argparse
@@ -31,12 +33,13 @@ HERE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 DPS = [0.00714285714, 0.005, 0.00357142857, 0.0025, 0.00178571429, 0.00125, 0.000892857143]
 
 
-def run_dir(out, dp, lim):
-    return os.path.join(out, "dp%.3fmm_%s" % (dp * 1e3, "on" if lim else "off"))
+def run_dir(out, dp, lim, cfl=None):
+    return os.path.join(out, "dp%.3fmm_%s%s" % (dp * 1e3, "on" if lim else "off",
+                                                "" if cfl is None else "_cfl%g" % cfl))
 
 
-def run_case(sphdem, scene, out, dp, lim, until):
-    d = run_dir(out, dp, lim)
+def run_case(sphdem, scene, out, dp, lim, until, cfl=None):
+    d = run_dir(out, dp, lim, cfl)
     js = os.path.join(d, "summary.json")
     if os.path.exists(js):
         with open(js) as f:
@@ -46,15 +49,18 @@ def run_case(sphdem, scene, out, dp, lim, until):
     cmd = [sphdem, "run", scene, "--out", d, "--set", "sph.dp=%r" % dp,
            "--set", "sph.mdbc_limiter=%s" % ("true" if lim else "false"),
            "--set", "time.end=%r" % until]
+    if cfl is not None:
+        cmd += ["--set", "time.cfl=%r" % cfl]
     with open(d + ".log", "w") as log:
         subprocess.run(cmd, env=env, stdout=log, stderr=subprocess.STDOUT)
     return d
 
 
-def summarize(d, dp, lim, until):
+def summarize(d, dp, lim, until, cfl=None):
     with open(os.path.join(d, "summary.json")) as f:
         js = json.load(f)
-    r = {"dp_mm": dp * 1e3, "limiter": "on" if lim else "off", "fluid": js["particles"]["fluid"],
+    r = {"dp_mm": dp * 1e3, "limiter": "on" if lim else "off",
+         "cfl": "scene" if cfl is None else repr(cfl), "fluid": js["particles"]["fluid"],
          "wall_s": js["wall_seconds"], "steps": js["steps"], "status": js["status"],
          "t_end": js["sim_time"]}
     h, rows = flume_study.read_csv(os.path.join(d, "plate.csv"))
@@ -90,17 +96,24 @@ def main():
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--sphdem", default=os.path.join(HERE, "build", "sphdem"))
     ap.add_argument("--scene", default=os.path.join(HERE, "inputs", "flume", "thin_plate_2d.yaml"))
+    ap.add_argument("--spread-cfl", type=float, nargs="*", default=[],
+                    help="also run these time.cfl values (the scene has 0.2) at --spread-dps, to "
+                    "show the run-to-run spread the flow's chaos gives")
+    ap.add_argument("--spread-dps", type=float, nargs="*", default=[])
     ap.add_argument("--summarize-only", action="store_true")
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
-    cases = [(dp, lim) for dp in sorted(a.dps, reverse=True) for lim in (False, True)]
+    cases = [(dp, lim, None) for dp in sorted(a.dps, reverse=True) for lim in (False, True)]
+    cases += [(dp, lim, c) for dp in sorted(a.spread_dps, reverse=True) for lim in (False, True)
+              for c in a.spread_cfl]
     if not a.summarize_only:
         with ThreadPoolExecutor(a.jobs) as ex:
-            list(ex.map(lambda c: run_case(a.sphdem, a.scene, a.out, c[0], c[1], a.until), cases))
-    rows = [summarize(run_dir(a.out, dp, lim), dp, lim, a.until) for dp, lim in cases
-            if os.path.exists(os.path.join(run_dir(a.out, dp, lim), "summary.json"))]
+            list(ex.map(lambda c: run_case(a.sphdem, a.scene, a.out, c[0], c[1], a.until, c[2]),
+                        cases))
+    rows = [summarize(run_dir(a.out, *c), *c[:2], a.until, c[2]) for c in cases
+            if os.path.exists(os.path.join(run_dir(a.out, *c), "summary.json"))]
     done = [r for r in rows if r["status"] == "completed" and r["t_end"] >= a.until - 1e-6]
-    refs = [r for r in done if r["limiter"] == "off"]
+    refs = [r for r in done if r["limiter"] == "off" and r["cfl"] == "scene"]
     if not refs:
         raise SystemExit("no completed limiter-off run to compare with")
     ref = min(refs, key=lambda r: r["dp_mm"])
@@ -108,7 +121,7 @@ def main():
         ok = r in done and r is not ref
         for k in KEYS:
             r["diff_" + k] = abs(r[k] - ref[k]) / abs(ref[k]) if ok and ref[k] else float("nan")
-    cols = ["dp_mm", "limiter", "fluid", "steps", "wall_s", "status", "t_end", "peak_50ms",
+    cols = ["dp_mm", "limiter", "cfl", "fluid", "steps", "wall_s", "status", "t_end", "peak_50ms",
             "t_peak", "impulse", "late_mean", "max_runup", "clips_max", "cut_max"] + \
         ["diff_" + k for k in KEYS]
     base = os.path.join(a.out, "thin_plate_study")
@@ -124,11 +137,21 @@ def main():
     for ax, k in zip(axs, KEYS):
         for lim, style in (("off", "o-"), ("on", "s--")):
             pts = [(r["wall_s"], r["diff_" + k], r["dp_mm"]) for r in rows
-                   if r["limiter"] == lim and r["diff_" + k] == r["diff_" + k] and r["diff_" + k] > 0]
+                   if r["limiter"] == lim and r["cfl"] == "scene" and r["diff_" + k] == r["diff_" + k] and r["diff_" + k] > 0]
             if pts:
-                ax.loglog([p[0] for p in pts], [p[1] for p in pts], style, label="limiter " + lim)
+                line = ax.loglog([p[0] for p in pts], [p[1] for p in pts], style,
+                                 label="limiter " + lim)[0]
                 for x, y, dp in pts:
                     ax.annotate("%.2g" % dp, (x, y), fontsize=6)
+                # at the wall time of the same dp's scene-CFL run (they may have shared the cores)
+                base_wall = {r["dp_mm"]: r["wall_s"] for r in rows
+                        if r["limiter"] == lim and r["cfl"] == "scene"}
+                var = [(base_wall[r["dp_mm"]], r["diff_" + k]) for r in rows if r["limiter"] == lim and
+                       r["cfl"] != "scene" and r["dp_mm"] in base_wall and
+                       r["diff_" + k] == r["diff_" + k] and r["diff_" + k] > 0]
+                if var:
+                    ax.loglog([v[0] for v in var], [v[1] for v in var], style[0], ms=3, alpha=0.5,
+                              color=line.get_color(), label="limiter %s, other CFL" % lim)
         ax.set_title(k.replace("_", " "), fontsize=9)
         ax.set_xlabel("wall time to t = %g s (s, 1 thread)" % a.until, fontsize=8)
     axs[0].set_ylabel("difference from dp = %.2f mm, limiter off" % ref["dp_mm"], fontsize=8)

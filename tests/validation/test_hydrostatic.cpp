@@ -21,6 +21,7 @@
 
 #include "app/simulation.hpp"
 #include "core/error.hpp"
+#include "validation/run_files.hpp"
 #include "diagnostics/guards.hpp"
 #include "io/scene_yaml.hpp"
 
@@ -205,6 +206,32 @@ TEST(Hydrostatic, MdbcLimiterKeepsTheTankHydrostatic) {
 
 // A perturbed input must make the comparator fail (DESIGN.md §8): with gravity doubled the
 // pressure and the floor force are about twice the original rho0 g (H - z) and rho0 g H L.
+// A scene with a force probe writes mdbc_limiter.csv with the limiter off, so a run that measures
+// wall loads says where the limiter would act. In the tank at rest the fluid density is linear in
+// depth, which the ghost-node fit reproduces, so no wall below the free surface's reach is past
+// the bound: the only clips (0.016 kg/m^3 at most here) are at the top corners, whose ghost nodes
+// see the surface's truncated support.
+TEST(Hydrostatic, ForceProbeWritesLimiterStatsAndOnlyTheSurfaceCornersClip) {
+  const std::string out = "hydrostatic_limiter_stats";
+  const Scene scene = load_scene(tank_scene(), {"sph.dp=" + std::to_string(kDp), "time.end=0.2"});
+  ASSERT_FALSE(scene.sph.mdbc_limiter);
+  ASSERT_FALSE(scene.diagnostics.forces.empty());
+  const RunResult r = runfiles::run_host(scene, out);
+  ASSERT_FALSE(r.unstable);
+  const auto rows = runfiles::read_numeric_csv(out + "/mdbc_limiter.csv");
+  ASSERT_EQ(rows.size(), 20u);  // every 0.01 s to 0.2 s
+  const double h = scene.sph.h_factor * std::sqrt(2.0) * kDp;
+  int clipped_rows = 0;
+  for (const auto& row : rows) {
+    EXPECT_GT(row[2], kRho0) << "t = " << row[0];  // rho_fit_max: the floor's wall fit
+    if (row[1] > 0) {
+      ++clipped_rows;
+      EXPECT_GT(row[8], kDepth - 2 * h) << "t = " << row[0];  // cut_z: at the surface
+    }
+  }
+  EXPECT_GT(clipped_rows, 0);  // the check above is not vacuous
+}
+
 TEST(Hydrostatic, ComparatorFailsWithDoubledGravity) {
   const TankResult r = run_tank({"gravity=[0,0,-19.62]"}, 0.3, 0.1, kG);
   std::printf(
