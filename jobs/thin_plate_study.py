@@ -65,6 +65,9 @@ def summarize(d, dp, lim, until, cfl=None):
          "t_end": js["sim_time"]}
     h, rows = flume_study.read_csv(os.path.join(d, "plate.csv"))
     rows = [x for x in rows if x[0] <= until + 1e-9]
+    if not rows:
+        raise SystemExit("%s: plate.csv has no rows (the run stopped before its first "
+                         "diagnostic time; see %s.log)" % (d, d))
     t = [x[0] for x in rows]
     fx = [x[h.index("fx")] for x in rows]
     m = flume_study.running_mean(t, fx, 0.05)
@@ -110,8 +113,12 @@ def main():
         with ThreadPoolExecutor(a.jobs) as ex:
             list(ex.map(lambda c: run_case(a.sphdem, a.scene, a.out, c[0], c[1], a.until, c[2]),
                         cases))
+    missing = [run_dir(a.out, *c) for c in cases
+               if not os.path.exists(os.path.join(run_dir(a.out, *c), "summary.json"))]
+    for d in missing:  # not run, or sphdem refused the case: its log says why
+        print("%s: no summary.json, left out (see %s.log)" % (d, d), file=sys.stderr)
     rows = [summarize(run_dir(a.out, *c), *c[:2], a.until, c[2]) for c in cases
-            if os.path.exists(os.path.join(run_dir(a.out, *c), "summary.json"))]
+            if run_dir(a.out, *c) not in missing]
     done = [r for r in rows if r["status"] == "completed" and r["t_end"] >= a.until - 1e-6]
     refs = [r for r in done if r["limiter"] == "off" and r["cfl"] == "scene"]
     if not refs:

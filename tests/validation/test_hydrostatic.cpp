@@ -21,9 +21,9 @@
 
 #include "app/simulation.hpp"
 #include "core/error.hpp"
-#include "validation/run_files.hpp"
 #include "diagnostics/guards.hpp"
 #include "io/scene_yaml.hpp"
+#include "validation/run_files.hpp"
 
 namespace sphdem {
 namespace {
@@ -204,13 +204,11 @@ TEST(Hydrostatic, MdbcLimiterKeepsTheTankHydrostatic) {
   EXPECT_EQ(r.below_floor + r.outside_walls, 0);
 }
 
-// A perturbed input must make the comparator fail (DESIGN.md §8): with gravity doubled the
-// pressure and the floor force are about twice the original rho0 g (H - z) and rho0 g H L.
 // A scene with a force probe writes mdbc_limiter.csv with the limiter off, so a run that measures
 // wall loads says where the limiter would act. In the tank at rest the fluid density is linear in
-// depth, which the ghost-node fit reproduces, so no wall below the free surface's reach is past
-// the bound: the only clips (0.016 kg/m^3 at most here) are at the top corners, whose ghost nodes
-// see the surface's truncated support.
+// depth, which the ghost-node fit reproduces, so the largest would-be change (0.016 kg/m^3 here)
+// is at the top corners, whose ghost nodes see the surface's truncated support, never deeper.
+// (The file gives the largest change's position, not every clip's.)
 TEST(Hydrostatic, ForceProbeWritesLimiterStatsAndOnlyTheSurfaceCornersClip) {
   const std::string out = "hydrostatic_limiter_stats";
   const Scene scene = load_scene(tank_scene(), {"sph.dp=" + std::to_string(kDp), "time.end=0.2"});
@@ -232,6 +230,8 @@ TEST(Hydrostatic, ForceProbeWritesLimiterStatsAndOnlyTheSurfaceCornersClip) {
   EXPECT_GT(clipped_rows, 0);  // the check above is not vacuous
 }
 
+// A perturbed input must make the comparator fail (DESIGN.md §8): with gravity doubled the
+// pressure and the floor force are about twice the original rho0 g (H - z) and rho0 g H L.
 TEST(Hydrostatic, ComparatorFailsWithDoubledGravity) {
   const TankResult r = run_tank({"gravity=[0,0,-19.62]"}, 0.3, 0.1, kG);
   std::printf(
