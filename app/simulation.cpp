@@ -706,26 +706,27 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
     const ParticleSet<Host> all = gathered();
     if (root) diag.write(solver->time(), all, p);
   };
-  // The Mach guard's particle: the fastest fluid particle over all ranks (every rank calls this
-  // together, since the step's reductions agree).
-  auto locate_fastest = [&]() -> std::string {
-    FastestFluid f = fastest_fluid(solver->host_particles());
+  // The particle the Mach or the density guard names: the fastest, densest or lightest fluid
+  // particle over all ranks (every rank calls this together, since the step's reductions agree).
+  auto locate_extreme = [&](Extreme e) -> std::string {
+    ExtremeFluid f = extreme_fluid(solver->host_particles(), e);
     if (ex) {
       struct {
-        double speed;
+        double key;
         int rank;
-      } mine{f.speed, rank}, top{};
+      } mine{f.key, rank}, top{};
       MPI_Allreduce(&mine, &top, 1, MPI_DOUBLE_INT, MPI_MAXLOC, comm);
-      double buf[8] = {f.speed,         double(f.pos.x), double(f.pos.y), double(f.pos.z),
+      double buf[8] = {f.key,           double(f.pos.x), double(f.pos.y), double(f.pos.z),
                        double(f.vel.x), double(f.vel.y), double(f.vel.z), double(f.rho)};
       std::uint64_t id = f.id;
       MPI_Bcast(buf, 8, MPI_DOUBLE, top.rank, comm);
       MPI_Bcast(&id, 1, MPI_UINT64_T, top.rank, comm);
-      f = FastestFluid{buf[0], GlobalId(id), Vec3(Real(buf[1]), Real(buf[2]), Real(buf[3])),
+      f = ExtremeFluid{buf[0], GlobalId(id), Vec3(Real(buf[1]), Real(buf[2]), Real(buf[3])),
                        Vec3(Real(buf[4]), Real(buf[5]), Real(buf[6])), Real(buf[7])};
     }
-    return fastest_fluid_text(f) + near_solid_text(scene, solver->time(), f.pos, rep.boundary_depth,
-                                                   rep.thin, rep.boundary_depth);
+    return fluid_particle_text(f) + near_solid_text(scene, solver->time(), f.pos,
+                                                    rep.boundary_depth, rep.thin,
+                                                    rep.boundary_depth);
   };
   std::unique_ptr<FrameWriter> frames;
   Real next_frame = 0;
@@ -879,7 +880,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
         log << "t = " << solver->time() << " s: " << st.removed
             << " fluid particles left the domain\n";
       const auto guards_from = clock::now();
-      check_step_guards(scene, p, st, solver->time(), solver->step_count(), locate_fastest);
+      check_step_guards(scene, p, st, solver->time(), solver->step_count(), locate_extreme);
       if (solver->fluid_count() == 0) {
         log << "t = " << solver->time() << " s: all fluid has left the domain; stopping\n";
         break;

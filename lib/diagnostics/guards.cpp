@@ -22,21 +22,23 @@ bool finite(const Vec3& v) {
 }
 }  // namespace
 
-FastestFluid fastest_fluid(const ParticleSet<Host>& ps) {
-  FastestFluid f;
+ExtremeFluid extreme_fluid(const ParticleSet<Host>& ps, Extreme e) {
+  ExtremeFluid f;
   for (Index i = 0; i < ps.n_fluid; ++i) {
-    const double s = std::sqrt(double(norm2(ps.vel[i])));
-    if (s > f.speed) f = FastestFluid{s, ps.id[i], ps.pos[i], ps.vel[i], ps.rho[i]};
+    const double k = e == Extreme::fastest   ? std::sqrt(double(norm2(ps.vel[i])))
+                     : e == Extreme::densest ? double(ps.rho[i])
+                                             : -double(ps.rho[i]);
+    if (k > f.key) f = ExtremeFluid{k, ps.id[i], ps.pos[i], ps.vel[i], ps.rho[i]};
   }
   return f;
 }
 
-std::string fastest_fluid_text(const FastestFluid& f) {
-  if (f.speed < 0) return "no fluid particle";
+std::string fluid_particle_text(const ExtremeFluid& f) {
+  if (!f.found()) return "no fluid particle";
   std::ostringstream d;
   d << "fluid particle id " << f.id << " at (" << f.pos.x << ", " << f.pos.y << ", " << f.pos.z
-    << "), speed " << f.speed << " m/s, velocity (" << f.vel.x << ", " << f.vel.y << ", " << f.vel.z
-    << "), density " << f.rho << " kg/m^3";
+    << "), speed " << std::sqrt(double(norm2(f.vel))) << " m/s, velocity (" << f.vel.x << ", "
+    << f.vel.y << ", " << f.vel.z << "), density " << f.rho << " kg/m^3";
   return d.str();
 }
 
@@ -71,7 +73,7 @@ std::string near_solid_text(const Scene& scene, Real time, const Vec3& x, Real r
 }
 
 void check_step_guards(const Scene& scene, const StepParams& p, const StepStats& st, Real time,
-                       std::int64_t step, const std::function<std::string()>& locate) {
+                       std::int64_t step, const std::function<std::string(Extreme)>& locate) {
   if (!std::isfinite(st.dt) || !std::isfinite(st.max_speed) || !std::isfinite(st.rho_min) ||
       !std::isfinite(st.rho_max)) {
     std::ostringstream d;
@@ -94,6 +96,11 @@ void check_step_guards(const Scene& scene, const StepParams& p, const StepStats&
     std::ostringstream d;
     d << "fluid density range [" << st.rho_min << ", " << st.rho_max << "] kg/m^3 leaves [" << lo
       << ", " << hi << "] (guards.rho_min_ratio/rho_max_ratio times rho0)";
+    if (locate) {
+      const bool dense = st.rho_max > hi;
+      d << "; the " << (dense ? "densest" : "lightest") << " is "
+        << locate(dense ? Extreme::densest : Extreme::lightest);
+    }
     fail("density out of bounds", time, step, d.str(),
          "Check density diffusion (fluid.diffusion), the CFL number and c0");
   }
@@ -102,7 +109,7 @@ void check_step_guards(const Scene& scene, const StepParams& p, const StepStats&
     std::ostringstream d;
     d << "max speed " << st.max_speed << " m/s is Mach " << mach << " of c0 = " << p.eos.c0
       << " m/s, above guards.mach_max = " << scene.guards.mach_max;
-    if (locate) d << "; the fastest is " << locate();
+    if (locate) d << "; the fastest is " << locate(Extreme::fastest);
     fail("Mach number too high", time, step, d.str(),
          "Raise fluid.c0 (or fluid.c0_factor) so the fluid stays weakly compressible");
   }

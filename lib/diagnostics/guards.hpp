@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <string>
 
 #include "scene/build.hpp"
@@ -15,31 +16,38 @@
 
 namespace sphdem {
 
-// Cheap checks from the step's reductions: dt floor, Mach number, density range, NaN in them.
-// `locate`, when given, is called only when the Mach guard fires and names the fastest particle
-// (fastest_fluid_text); on many ranks every rank calls it (the reductions agree), so it may be
-// collective.
-void check_step_guards(const Scene& scene, const StepParams& p, const StepStats& st, Real time,
-                       std::int64_t step, const std::function<std::string()>& locate = {});
+// Which fluid particle a guard names: the fastest (the Mach guard), or the densest or the
+// lightest (the density guard, by the side of its bounds that was left).
+enum class Extreme { fastest, densest, lightest };
 
-// The fastest fluid particle of a host copy (speed < 0 when it holds no fluid).
-struct FastestFluid {
-  double speed = -1;
+// Cheap checks from the step's reductions: dt floor, Mach number, density range, NaN in them.
+// `locate`, when given, is called only when the Mach or the density guard fires, and names the
+// particle that guard judged (fluid_particle_text of extreme_fluid); on many ranks every rank
+// calls it (the reductions agree), so it may be collective.
+void check_step_guards(const Scene& scene, const StepParams& p, const StepStats& st, Real time,
+                       std::int64_t step, const std::function<std::string(Extreme)>& locate = {});
+
+// One fluid particle of a host copy, with `key` the value it is extreme in (speed, density, or
+// minus the density); key is -inf when the copy holds no fluid.
+struct ExtremeFluid {
+  double key = -std::numeric_limits<double>::infinity();
   GlobalId id = 0;
   Vec3 pos, vel;
   Real rho = 0;
+  bool found() const { return key > -std::numeric_limits<double>::infinity(); }
 };
-FastestFluid fastest_fluid(const ParticleSet<Host>& ps);
+// The fastest, the densest or the lightest fluid particle (the first in slot order on ties).
+ExtremeFluid extreme_fluid(const ParticleSet<Host>& ps, Extreme e);
 
 // "fluid particle id N at (x, y, z), speed S m/s, velocity (u, v, w), density rho kg/m^3".
-std::string fastest_fluid_text(const FastestFluid& f);
+std::string fluid_particle_text(const ExtremeFluid& f);
 
 // Where x stands against the nearest solid whose surface lies within `reach` (removed solids
 // skipped): "; it is 5.5 mm inside solid 'barrier_2'" or "...from the surface of solid ..."
 // (saying so when that is nearer than dp/2, where the first fluid layer sits), and, when that
 // solid is one of `thin` (thinner than the boundary depth), that it can leak.
-// Empty when no solid is that near. The Mach guard appends it to the fastest particle: a
-// particle squeezed into a thin wall is the usual cause of a lone fast particle.
+// Empty when no solid is that near. The Mach and density guards append it to the particle they
+// name: a particle squeezed into a thin wall is the usual cause of a lone fast or dense particle.
 std::string near_solid_text(const Scene& scene, Real time, const Vec3& x, Real reach,
                             const std::vector<ThinSolid>& thin, Real boundary_depth);
 

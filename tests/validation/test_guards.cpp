@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -95,25 +96,43 @@ void expect_guard(const GuardRun& g, const std::string& cause, std::int64_t max_
   EXPECT_EQ(rows, r.fluid + r.wall + r.grain);
 }
 
-// The Mach guard names the fastest fluid particle; the emergency state (the state the guard
-// judged) holds it at the speed the message gives, which is the message's max speed and the
-// largest speed of any fluid row in the file.
-void expect_fastest_named(const GuardRun& g) {
+// The Mach guard names the fastest fluid particle, the density guard the densest or the
+// lightest; the emergency state (the state the guard judged) holds it with the value the message
+// gives for it, which is the message's own figure (the max speed, or the density range's end) and
+// the extreme of every fluid row in the file.
+enum class Named { fastest, densest, lightest };
+void expect_named(const GuardRun& g, Named what) {
   const std::string& m = g.r.failure;
-  const std::size_t at_max = m.find("max speed "),
-                    at_id = m.find("the fastest is fluid particle id ");
-  ASSERT_NE(at_max, std::string::npos) << m;
+  const char* figure = what == Named::fastest ? "max speed " : "fluid density range [";
+  const char* intro = what == Named::fastest   ? "the fastest is fluid particle id "
+                      : what == Named::densest ? "the densest is fluid particle id "
+                                               : "the lightest is fluid particle id ";
+  const char* field = what == Named::fastest ? ", speed " : ", density ";
+  const std::size_t at_fig = m.find(figure), at_id = m.find(intro);
+  ASSERT_NE(at_fig, std::string::npos) << m;
   ASSERT_NE(at_id, std::string::npos) << m;
-  const double max_speed = std::stod(m.substr(at_max + 10));
-  const std::string id = std::to_string(std::stoull(m.substr(at_id + 33)));
-  const std::size_t at_speed = m.find(", speed ", at_id);
-  ASSERT_NE(at_speed, std::string::npos) << m;
-  const double named_speed = std::stod(m.substr(at_speed + 8));
-  EXPECT_NEAR(named_speed, max_speed, 1e-5 * max_speed) << m;
+  double fig = std::stod(m.substr(at_fig + std::strlen(figure)));  // speed, or the range's low end
+  if (what == Named::densest) {
+    const std::size_t comma = m.find(", ", at_fig);
+    ASSERT_NE(comma, std::string::npos) << m;
+    fig = std::stod(m.substr(comma + 2));  // the range's high end
+  }
+  const std::string id = std::to_string(std::stoull(m.substr(at_id + std::strlen(intro))));
+  const std::size_t at_val = m.find(field, at_id);
+  ASSERT_NE(at_val, std::string::npos) << m;
+  const double named = std::stod(m.substr(at_val + std::strlen(field)));
+  EXPECT_NEAR(named, fig, 1e-5 * fig) << m;
   std::ifstream f(g.out + "/emergency_step" + std::to_string(g.r.steps) + ".csv");
   std::string line;
   std::getline(f, line);  // header
-  double row_speed = -1, fastest = -1;
+  // The row's value as the guard ranks it: speed, density, or minus the density.
+  auto key = [&](const std::vector<double>& v) {
+    return what == Named::fastest   ? std::sqrt(v[3] * v[3] + v[4] * v[4] + v[5] * v[5])
+           : what == Named::densest ? v[6]
+                                    : -v[6];
+  };
+  double row = -1e300, extreme = -1e300;
+  bool seen = false;
   while (std::getline(f, line)) {
     std::stringstream ss(line);
     std::string cell, role;
@@ -125,13 +144,15 @@ void expect_fastest_named(const GuardRun& g) {
       if (k >= 2) v.push_back(std::stod(cell));
     }
     if (role != "fluid") continue;
-    const double s = std::sqrt(v[3] * v[3] + v[4] * v[4] + v[5] * v[5]);
-    fastest = std::max(fastest, s);
-    if (first == id) row_speed = s;
+    extreme = std::max(extreme, key(v));
+    if (first == id) {
+      row = key(v);
+      seen = true;
+    }
   }
-  ASSERT_GE(row_speed, 0) << "particle " << id << " not in the emergency state";
-  EXPECT_NEAR(row_speed, named_speed, 1e-5 * named_speed) << m;
-  EXPECT_EQ(row_speed, fastest) << "a faster fluid particle is in the file: " << fastest;
+  ASSERT_TRUE(seen) << "particle " << id << " not in the emergency state";
+  EXPECT_NEAR(std::fabs(row), named, 1e-5 * named) << m;
+  EXPECT_EQ(row, extreme) << "a more extreme fluid particle is in the file: " << extreme;
 }
 
 void expect_completed(const GuardRun& g) {
@@ -149,7 +170,7 @@ TEST(Guards, NoDiffusionHugeCflTripsMachGuard) {
       run_case(dam_break(), coarse_dam_break({"fluid.diffusion.model=none", "time.cfl=1.0"}),
                "no_diffusion_cfl1");
   expect_guard(g, "Mach number too high", 60);
-  expect_fastest_named(g);
+  expect_named(g, Named::fastest);
   // The cause is the CFL number: the same scene at CFL 0.2 runs past that time.
   const GuardRun c =
       run_case(dam_break(),
@@ -167,6 +188,20 @@ TEST(Guards, NoDiffusionFixedLargeStepTripsDensityGuard) {
                "no_diffusion_dt1ms");
   expect_guard(g, "density out of bounds", 10);
   EXPECT_NE(g.r.failure.find("] kg/m^3 leaves [700, 1300]"), std::string::npos) << g.r.failure;
+  expect_named(g, Named::densest);
+}
+
+// The same state judged with the bounds moved to [0.9, 10] rho0: now only its low end, 814 kg/m^3
+// on a particle near the surface, is out of bounds, and the guard names the lightest particle.
+TEST(Guards, DensityGuardNamesTheLightestWhenTheLowBoundIsLeft) {
+  const GuardRun g =
+      run_case(dam_break(),
+               coarse_dam_break({"fluid.diffusion.model=none", "time.dt_fixed=1e-3",
+                                 "guards.rho_min_ratio=0.9", "guards.rho_max_ratio=10"}),
+               "no_diffusion_dt1ms_low");
+  expect_guard(g, "density out of bounds", 10);
+  EXPECT_NE(g.r.failure.find("] kg/m^3 leaves [900, 10000]"), std::string::npos) << g.r.failure;
+  expect_named(g, Named::lightest);
 }
 
 // (b) A floor one particle layer thick hit by water at 10 m/s: the fluid goes through the floor.
@@ -204,7 +239,7 @@ TEST(Guards, ThinWallTripsPenetrationGuard) {
 TEST(Guards, LowSoundSpeedTripsMachGuard) {
   const GuardRun g = run_case(dam_break(), coarse_dam_break({"fluid.c0=10"}), "low_c0");
   expect_guard(g, "Mach number too high", 800);
-  expect_fastest_named(g);
+  expect_named(g, Named::fastest);
   EXPECT_NE(g.r.failure.find("of c0 = 10 m/s"), std::string::npos) << g.r.failure;
   EXPECT_GT(g.r.sim_time, 0.03);  // the flow, not the start, is too fast
 }
