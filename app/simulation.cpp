@@ -315,6 +315,11 @@ class DiagnosticWriter {
                  {"t", "clipped", "rho_fit_max", "rho_cut_max", "clip_x_lo", "clip_x_hi", "cut_x",
                   "cut_y", "cut_z"},
                  append, keep_before);
+    // Always: how near the run comes to its stability guards (docs/SCENES.md, outputs).
+    guards_.open(path("guards"),
+                 {"t", "steps", "max_speed", "mach", "rho_min", "rho_max", "dt_min"}, append,
+                 keep_before);
+    guards_on_ = true;
     if (d.energy)
       energy_.open(path("energy"), {"t", "kinetic", "potential", "total", "px", "py", "pz"}, append,
                    keep_before);
@@ -375,7 +380,20 @@ class DiagnosticWriter {
       profile_next_[i] = std::size_t(v[i]);
   }
 
+  // guards.csv: every step's reductions join the span of the next row (all ranks call this; the
+  // reductions agree).
+  void add_step(const StepStats& st) { span_.add(st); }
+  // The row for the steps since the previous one (none before the first step), at time t; the
+  // run's last row when a guard fires, whose span ends with the step the guard judged.
+  void write_guards(Real t, Real c0) {
+    if (!guards_on_ || span_.steps == 0) return;
+    guards_.row({t, double(span_.steps), span_.max_speed, span_.max_speed / c0, span_.rho_min,
+                 span_.rho_max, span_.dt_min});
+    span_ = GuardSpan{};
+  }
+
   void write(Real t, const ParticleSet<Host>& ps, const StepParams& p) {
+    write_guards(t, p.eos.c0);
     // A symmetry plane: every diagnostic reads the mirrored full scene.
     if (scene_.symmetry.enabled()) {
       if (mirror_.empty()) mirror_ = mirror_solids(scene_);
@@ -493,7 +511,9 @@ class DiagnosticWriter {
   std::vector<CsvSeries> pressure_, height_, front_, force_, profile_;
   std::vector<std::size_t> profile_next_;
   std::vector<std::int32_t> mirror_;  // symmetry plane: each solid's mirror image
-  CsvSeries energy_, impact_, runup_, trap_, velocity_, mdbc_;
+  CsvSeries energy_, impact_, runup_, trap_, velocity_, mdbc_, guards_;
+  bool guards_on_ = false;           // rank 0 writes guards.csv
+  GuardSpan span_;                   // add_step
   MdbcLimiterStats mdbc_stats_;      // set_mdbc_limiter
   bool grain_cols_ = false;          // impact_force.csv has the grains' columns
   std::vector<Vec3> barrier_grain_;  // set_barrier_grain_force
@@ -880,6 +900,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
         log << "t = " << solver->time() << " s: " << st.removed
             << " fluid particles left the domain\n";
       const auto guards_from = clock::now();
+      diag.add_step(st);
       check_step_guards(scene, p, st, solver->time(), solver->step_count(), locate_extreme);
       if (solver->fluid_count() == 0) {
         log << "t = " << solver->time() << " s: all fluid has left the domain; stopping\n";
@@ -982,6 +1003,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
     r.failure = e.what();
     if (tty) std::cout << "\n";
     log << "ERROR: " << e.what() << "\n";
+    diag.write_guards(solver->time(), p.eos.c0);  // the span that ends with the judged step
     const std::string dump = opt.out_dir + "/emergency_step" + std::to_string(solver->step_count());
     const std::string csv = dump + (ex ? "_rank" + std::to_string(rank) : std::string()) + ".csv";
     write_state_csv(solver->host_particles(), csv);

@@ -38,7 +38,7 @@ def run_dir(out, dp, lim, cfl=None):
                                                 "" if cfl is None else "_cfl%g" % cfl))
 
 
-def run_case(sphdem, scene, out, dp, lim, until, cfl=None):
+def run_case(sphdem, scene, out, dp, lim, until, cfl=None, mach_max=None):
     d = run_dir(out, dp, lim, cfl)
     js = os.path.join(d, "summary.json")
     if os.path.exists(js):
@@ -51,9 +51,22 @@ def run_case(sphdem, scene, out, dp, lim, until, cfl=None):
            "--set", "time.end=%r" % until]
     if cfl is not None:
         cmd += ["--set", "time.cfl=%r" % cfl]
+    if mach_max is not None:
+        cmd += ["--set", "guards.mach_max=%r" % mach_max]
     with open(d + ".log", "w") as log:
         subprocess.run(cmd, env=env, stdout=log, stderr=subprocess.STDOUT)
     return d
+
+
+def mach_max_of(d):
+    """guards.mach_max as the run used it (its scene.yaml, overrides applied)."""
+    with open(os.path.join(d, "scene.yaml")) as f:
+        for line in f:
+            if line.strip().startswith("mach_max:"):
+                return float(line.split(":", 1)[1].split("#")[0])
+            if "mach_max:" in line:  # flow style: guards: {mach_max: 0.2, ...}
+                return float(line.split("mach_max:", 1)[1].split(",")[0].split("}")[0])
+    return float("nan")
 
 
 def summarize(d, dp, lim, until, cfl=None):
@@ -62,7 +75,7 @@ def summarize(d, dp, lim, until, cfl=None):
     r = {"dp_mm": dp * 1e3, "limiter": "on" if lim else "off",
          "cfl": "scene" if cfl is None else repr(cfl), "fluid": js["particles"]["fluid"],
          "wall_s": js["wall_seconds"], "steps": js["steps"], "status": js["status"],
-         "t_end": js["sim_time"]}
+         "t_end": js["sim_time"], "mach_max": mach_max_of(d)}
     h, rows = flume_study.read_csv(os.path.join(d, "plate.csv"))
     rows = [x for x in rows if x[0] <= until + 1e-9]
     if not rows:
@@ -103,6 +116,9 @@ def main():
                     help="also run these time.cfl values (the scene has 0.2) at --spread-dps, to "
                     "show the run-to-run spread the flow's chaos gives")
     ap.add_argument("--spread-dps", type=float, nargs="*", default=[])
+    ap.add_argument("--mach-max", type=float, default=None,
+                    help="guards.mach_max for the runs this call starts (the scene has 0.2); a "
+                    "run that stopped is run again, a completed one is kept")
     ap.add_argument("--summarize-only", action="store_true")
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
@@ -111,8 +127,8 @@ def main():
               for c in a.spread_cfl]
     if not a.summarize_only:
         with ThreadPoolExecutor(a.jobs) as ex:
-            list(ex.map(lambda c: run_case(a.sphdem, a.scene, a.out, c[0], c[1], a.until, c[2]),
-                        cases))
+            list(ex.map(lambda c: run_case(a.sphdem, a.scene, a.out, c[0], c[1], a.until, c[2],
+                                           a.mach_max), cases))
     missing = [run_dir(a.out, *c) for c in cases
                if not os.path.exists(os.path.join(run_dir(a.out, *c), "summary.json"))]
     for d in missing:  # not run, or sphdem refused the case: its log says why
@@ -128,7 +144,7 @@ def main():
         ok = r in done and r is not ref
         for k in KEYS:
             r["diff_" + k] = abs(r[k] - ref[k]) / abs(ref[k]) if ok and ref[k] else float("nan")
-    cols = ["dp_mm", "limiter", "cfl", "fluid", "steps", "wall_s", "status", "t_end", "peak_50ms",
+    cols = ["dp_mm", "limiter", "cfl", "mach_max", "fluid", "steps", "wall_s", "status", "t_end", "peak_50ms",
             "t_peak", "impulse", "late_mean", "max_runup", "clips_max", "cut_max"] + \
         ["diff_" + k for k in KEYS]
     base = os.path.join(a.out, "thin_plate_study")

@@ -42,6 +42,15 @@ std::string fluid_particle_text(const ExtremeFluid& f) {
   return d.str();
 }
 
+void GuardSpan::add(const StepStats& st) {
+  ++steps;
+  // Written so that a NaN replaces the extreme (a comparison with NaN is false).
+  if (!(st.max_speed <= max_speed)) max_speed = st.max_speed;
+  if (!(st.rho_min >= rho_min)) rho_min = st.rho_min;
+  if (!(st.rho_max <= rho_max)) rho_max = st.rho_max;
+  if (!(st.dt >= dt_min)) dt_min = st.dt;
+}
+
 std::string near_solid_text(const Scene& scene, Real time, const Vec3& x, Real reach,
                             const std::vector<ThinSolid>& thin, Real boundary_depth) {
   const Real dp = scene.sph.dp;

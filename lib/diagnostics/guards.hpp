@@ -42,6 +42,19 @@ ExtremeFluid extreme_fluid(const ParticleSet<Host>& ps, Extreme e);
 // "fluid particle id N at (x, y, z), speed S m/s, velocity (u, v, w), density rho kg/m^3".
 std::string fluid_particle_text(const ExtremeFluid& f);
 
+// The guards' quantities over the steps between two rows of guards.csv: the largest fluid speed,
+// the fluid density range and the shortest step, each the extreme over every step of the span,
+// so a row shows how near the run came to guards.mach_max and the density bounds, a spike
+// between two diagnostic times included. A NaN in a step's reductions stays in the span.
+struct GuardSpan {
+  std::int64_t steps = 0;
+  Real max_speed = 0;
+  Real rho_min = std::numeric_limits<Real>::infinity();
+  Real rho_max = -std::numeric_limits<Real>::infinity();
+  Real dt_min = std::numeric_limits<Real>::infinity();
+  void add(const StepStats& st);
+};
+
 // Where x stands against the nearest solid whose surface lies within `reach` (removed solids
 // skipped): "; it is 5.5 mm inside solid 'barrier_2'" or "...from the surface of solid ..."
 // (saying so when that is nearer than dp/2, where the first fluid layer sits), and, when that

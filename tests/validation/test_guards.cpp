@@ -67,6 +67,51 @@ GuardRun run_case(const std::string& scene_path, const std::vector<std::string>&
   return g;
 }
 
+// guards.csv of a run: its rows (t, steps, max_speed, mach, rho_min, rho_max, dt_min).
+std::vector<std::vector<double>> guard_rows(const GuardRun& g) {
+  std::ifstream f(g.out + "/guards.csv");
+  std::string line;
+  std::getline(f, line);
+  EXPECT_EQ(line, "t,steps,max_speed,mach,rho_min,rho_max,dt_min");
+  std::vector<std::vector<double>> rows;
+  while (std::getline(f, line)) {
+    std::stringstream ss(line);
+    std::string cell;
+    std::vector<double> v;
+    while (std::getline(ss, cell, ',')) v.push_back(std::stod(cell));
+    EXPECT_EQ(v.size(), 7u) << line;
+    if (v.size() == 7) rows.push_back(v);
+  }
+  return rows;
+}
+
+// What guards.csv must hold for any run: the rows' spans cover every step once (their step counts
+// sum to the run's, and none is empty), time grows, each row's mach is its max_speed over the one
+// c0, the density range is ordered, and dt_min is positive. A run that a guard stopped ends with
+// the row of the step the guard judged, at the run's last time.
+void expect_guard_rows(const GuardRun& g) {
+  const auto rows = guard_rows(g);
+  ASSERT_FALSE(rows.empty());
+  double steps = 0, t = -1;
+  double c0 = -1;  // from the first row that moves
+  for (const auto& v : rows)
+    if (c0 < 0 && v[3] > 0) c0 = v[2] / v[3];
+  ASSERT_GT(c0, 0);
+  for (const auto& v : rows) {
+    EXPECT_GT(v[0], t);
+    t = v[0];
+    EXPECT_GE(v[1], 1);
+    steps += v[1];
+    EXPECT_NEAR(v[2], v[3] * c0, 1e-8 * v[2]);
+    EXPECT_LE(v[4], v[5]);
+    EXPECT_GT(v[6], 0);
+  }
+  EXPECT_EQ(steps, double(g.r.steps));
+  if (g.r.unstable) {
+    EXPECT_NEAR(rows.back()[0], g.r.sim_time, 1e-9 * g.r.sim_time);
+  }
+}
+
 // What every guard must do: stop the run with "unstable: <cause> at t = ... (step N)", record it
 // in summary.json and write emergency_stepN.csv with every particle.
 void expect_guard(const GuardRun& g, const std::string& cause, std::int64_t max_steps) {
@@ -94,6 +139,7 @@ void expect_guard(const GuardRun& g, const std::string& cause, std::int64_t max_
   while (std::getline(f, line))
     if (!line.empty()) ++rows;
   EXPECT_EQ(rows, r.fluid + r.wall + r.grain);
+  expect_guard_rows(g);
 }
 
 // The Mach guard names the fastest fluid particle, the density guard the densest or the
@@ -122,6 +168,11 @@ void expect_named(const GuardRun& g, Named what) {
   ASSERT_NE(at_val, std::string::npos) << m;
   const double named = std::stod(m.substr(at_val + std::strlen(field)));
   EXPECT_NEAR(named, fig, 1e-5 * fig) << m;
+  // guards.csv's last row spans the judged step: its extreme is the message's figure.
+  const auto rows = guard_rows(g);
+  ASSERT_FALSE(rows.empty());
+  const int col = what == Named::fastest ? 2 : what == Named::densest ? 5 : 4;
+  EXPECT_NEAR(rows.back()[col], fig, 1e-5 * fig) << m;
   std::ifstream f(g.out + "/emergency_step" + std::to_string(g.r.steps) + ".csv");
   std::string line;
   std::getline(f, line);  // header
@@ -159,6 +210,7 @@ void expect_completed(const GuardRun& g) {
   EXPECT_FALSE(g.r.unstable) << g.r.failure;
   EXPECT_NE(read_file(g.out + "/summary.json").find("\"status\": \"completed\""),
             std::string::npos);
+  expect_guard_rows(g);
 }
 
 // (a) No density diffusion and CFL = 1 (the schema's maximum) on the dam break: the acoustic

@@ -10,7 +10,9 @@
 #include <fstream>
 #include <map>
 #include <sstream>
+#include <string>
 #include <thread>
+#include <vector>
 
 #include "app/simulation.hpp"
 #include "core/error.hpp"
@@ -69,6 +71,24 @@ TEST(Restart, ContinuesBitIdentically) {
   int headers = 0;
   while (std::getline(f, line)) headers += line.rfind("t,", 0) == 0;
   EXPECT_EQ(headers, 1);
+  // guards.csv: the resumed rows span the 200 steps run, and from the second on (the first spans
+  // only the steps since the restart) they are the straight run's rows, digit for digit.
+  auto lines = [](const std::string& path) {
+    std::ifstream in(path);
+    std::vector<std::string> v;
+    for (std::string l; std::getline(in, l);) v.push_back(l);
+    return v;
+  };
+  const auto gs = lines("restart_straight/guards.csv"), gr = lines("restart_resumed/guards.csv");
+  ASSERT_GE(gr.size(), 3u);
+  EXPECT_EQ(gr[0], gs[0]);
+  double steps = 0;
+  for (std::size_t i = 1; i < gr.size(); ++i) steps += std::stod(gr[i].substr(gr[i].find(',') + 1));
+  EXPECT_EQ(steps, 200);
+  const std::size_t tail = gr.size() - 2;  // rows after the first resumed one
+  ASSERT_GT(gs.size(), tail);
+  for (std::size_t k = 0; k < tail; ++k)
+    EXPECT_EQ(gr[gr.size() - 1 - k], gs[gs.size() - 1 - k]) << "row " << k << " from the end";
 }
 
 TEST(Restart, RefusesBadCheckpoints) {
