@@ -16,7 +16,10 @@ are taken against the finest run with the limiter off (the finest "on" run is in
 the two references can be compared). A run that stopped early (a guard) is listed with the
 time and message and left out of the differences. --spread-cfl runs each case at --spread-dps
 again with other CFL numbers: a different step sequence, the same physics, so the scatter of
-those runs is the run-to-run spread that the flow's chaos gives at that dp (small markers). Writes OUT/thin_plate_study.{csv,md} and,
+those runs is the run-to-run spread that the flow's chaos gives at that dp (small markers).
+--mach-max sets guards.mach_max for the runs it starts; the table gives each run's value and its
+largest Mach number over all steps (guards.csv), so a stop shows how far past the others it went.
+Writes OUT/thin_plate_study.{csv,md} and,
 with matplotlib, OUT/thin_plate_study.png (difference against wall time, log axes).
 """
 import argparse
@@ -91,6 +94,16 @@ def summarize(d, dp, lim, until, cfl=None):
     r["late_mean"] = sum(late) / len(late) if late else float("nan")
     hh, g = flume_study.read_csv(os.path.join(d, "h_up.csv"))
     r["max_runup"] = max(x[1] for x in g if x[0] <= until + 1e-9)
+    # The largest Mach number over every step (guards.csv; runs of sphdem before a4495a9 lack it)
+    # and when: how near the run came to guards.mach_max.
+    r["mach_peak"], r["t_mach_peak"] = float("nan"), float("nan")
+    gp = os.path.join(d, "guards.csv")
+    if os.path.exists(gp):
+        hg, gr = flume_study.read_csv(gp)
+        gr = [x for x in gr if x[0] <= until + 1e-9]
+        if gr:
+            top = max(gr, key=lambda x: x[hg.index("mach")])
+            r["mach_peak"], r["t_mach_peak"] = top[hg.index("mach")], top[0]
     lp = os.path.join(d, "mdbc_limiter.csv")
     r["clips_max"], r["cut_max"] = float("nan"), float("nan")  # no file: not counted
     if os.path.exists(lp):
@@ -145,7 +158,8 @@ def main():
         for k in KEYS:
             r["diff_" + k] = abs(r[k] - ref[k]) / abs(ref[k]) if ok and ref[k] else float("nan")
     cols = ["dp_mm", "limiter", "cfl", "mach_max", "fluid", "steps", "wall_s", "status", "t_end", "peak_50ms",
-            "t_peak", "impulse", "late_mean", "max_runup", "clips_max", "cut_max"] + \
+            "t_peak", "impulse", "late_mean", "max_runup", "mach_peak", "t_mach_peak", "clips_max",
+            "cut_max"] + \
         ["diff_" + k for k in KEYS]
     base = os.path.join(a.out, "thin_plate_study")
     flume_study.write_table(base, cols, rows, lambda v: v if isinstance(v, str) else repr(v))
