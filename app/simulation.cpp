@@ -848,6 +848,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
       if (coupling)  // the grain boundary particles take the grains' poses at t^n
         timed(lt.coupling, [&] { solver->pose_grains(coupling->table(), dem.system->bodies()); });
       const StepStats st = solver->step();
+      diag.add_step(st);  // guards.csv, before any guard can fire on this step
       if (coupling) {
         // The fluid's force on each grain at t^n drives the DEM from t^n to t^n + dt, in
         // sub-steps no longer than the DEM step (contacts between grains and with walls).
@@ -900,7 +901,6 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
         log << "t = " << solver->time() << " s: " << st.removed
             << " fluid particles left the domain\n";
       const auto guards_from = clock::now();
-      diag.add_step(st);
       check_step_guards(scene, p, st, solver->time(), solver->step_count(), locate_extreme);
       if (solver->fluid_count() == 0) {
         log << "t = " << solver->time() << " s: all fluid has left the domain; stopping\n";
