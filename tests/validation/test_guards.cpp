@@ -15,6 +15,7 @@
 
 #include "app/simulation.hpp"
 #include "io/scene_yaml.hpp"
+#include "validation/run_files.hpp"
 
 namespace sphdem {
 namespace {
@@ -69,19 +70,13 @@ GuardRun run_case(const std::string& scene_path, const std::vector<std::string>&
 
 // guards.csv of a run: its rows (t, steps, max_speed, mach, rho_min, rho_max, dt_min).
 std::vector<std::vector<double>> guard_rows(const GuardRun& g) {
-  std::ifstream f(g.out + "/guards.csv");
-  std::string line;
-  std::getline(f, line);
-  EXPECT_EQ(line, "t,steps,max_speed,mach,rho_min,rho_max,dt_min");
-  std::vector<std::vector<double>> rows;
-  while (std::getline(f, line)) {
-    std::stringstream ss(line);
-    std::string cell;
-    std::vector<double> v;
-    while (std::getline(ss, cell, ',')) v.push_back(std::stod(cell));
-    EXPECT_EQ(v.size(), 7u) << line;
-    if (v.size() == 7) rows.push_back(v);
-  }
+  const std::string path = g.out + "/guards.csv";
+  std::ifstream f(path);
+  std::string header;
+  std::getline(f, header);
+  EXPECT_EQ(header, "t,steps,max_speed,mach,rho_min,rho_max,dt_min");
+  auto rows = runfiles::read_numeric_csv(path);
+  for (const auto& v : rows) EXPECT_EQ(v.size(), 7u);
   return rows;
 }
 
