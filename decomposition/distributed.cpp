@@ -232,7 +232,8 @@ void MpiExchange::build_grain_halo(ParticleSet<Host>& g) {
   grains_->fill(g);
 }
 
-std::vector<std::uint8_t> MpiExchange::keep_walls(const Vec3* pos, const Vec3* ghost, Index n,
+std::vector<std::uint8_t> MpiExchange::keep_walls(const Vec3* pos, const Vec3* ghost,
+                                                  const Vec3* /*ghost_alt*/, Index n,
                                                   bool by_ghost) const {
   std::vector<std::uint8_t> keep(static_cast<std::size_t>(n));
   for (Index i = 0; i < n; ++i)

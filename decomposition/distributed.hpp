@@ -50,8 +50,11 @@ class MpiExchange final : public Exchange {
   void bcast_positions(const Vec3* owned, Vec3* halo) override {
     plan_->bcast_positions(owned, halo);
   }
-  std::vector<std::uint8_t> keep_walls(const Vec3* pos, const Vec3* ghost, Index n,
-                                       bool by_ghost) const override;
+  // ghost_alt is not needed here: the halo width already adds the scene's largest distance
+  // between a wall's two ghost nodes (BuildReport::ghost_spread), so the rank owning the first
+  // holds the fluid around the second.
+  std::vector<std::uint8_t> keep_walls(const Vec3* pos, const Vec3* ghost, const Vec3* ghost_alt,
+                                       Index n, bool by_ghost) const override;
   ParticleSet<Host> deal_walls(ParticleSet<Host>& walls, bool by_ghost) const override;
   void build_wall_plan(const GlobalId* id, const std::uint8_t* mine, Index n) override {
     walls_.reset();

@@ -49,8 +49,11 @@ class Exchange {
   virtual void bcast_positions(const Vec3* owned, Vec3* halo) = 0;
   virtual void bcast_field(const Vec3* owned, Vec3* halo, HaloField) { bcast(owned, halo); }
   // Walls: 1 for each of n wall particles this rank keeps (within the halo width of its box, or,
-  // by_ghost, with the ghost node in its box).
-  virtual std::vector<std::uint8_t> keep_walls(const Vec3* pos, const Vec3* ghost, Index n,
+  // by_ghost, with the ghost node in its box). ghost_alt: each wall's second ghost node (a thin
+  // solid's other face, or a corner's other wall; equal to ghost where there is none), whose
+  // gather needs fluid around it too.
+  virtual std::vector<std::uint8_t> keep_walls(const Vec3* pos, const Vec3* ghost,
+                                               const Vec3* ghost_alt, Index n,
                                                bool by_ghost) const = 0;
   // Walls to the ranks that keep them, after the boxes changed (rebalance) or a checkpoint read:
   // each rank passes a set of wall slots only (n_wall = size) that no other rank passes, and gets

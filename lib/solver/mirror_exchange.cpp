@@ -17,12 +17,13 @@ Real MirrorExchange::width() const {
   return std::max(width_, ghost_reach_ + support_);
 }
 
-std::vector<std::uint8_t> MirrorExchange::keep_walls(const Vec3* pos, const Vec3* ghost, Index n,
+std::vector<std::uint8_t> MirrorExchange::keep_walls(const Vec3* pos, const Vec3* ghost,
+                                                     const Vec3* ghost_alt, Index n,
                                                      bool by_ghost) const {
   Real reach = 0;
   for (Index i = 0; i < n; ++i) {
     reach = std::max(reach, -plane_.side(pos[i]));
-    if (by_ghost) reach = std::max(reach, -plane_.side(ghost[i]));
+    if (by_ghost) reach = std::max({reach, -plane_.side(ghost[i]), -plane_.side(ghost_alt[i])});
   }
   ghost_reach_ = reach;
   return std::vector<std::uint8_t>(std::size_t(n), 1);

@@ -49,9 +49,10 @@ class MirrorExchange final : public Exchange {
   void bcast(const Vec3* owned, Vec3* halo) override;
   void bcast_positions(const Vec3* owned, Vec3* halo) override;
   void bcast_field(const Vec3* owned, Vec3* halo, HaloField kind) override;
-  // Keeps every wall; records how far the mDBC ghost nodes reach across the plane.
-  std::vector<std::uint8_t> keep_walls(const Vec3* pos, const Vec3* ghost, Index n,
-                                       bool by_ghost) const override;
+  // Keeps every wall; records how far the walls and, by_ghost, both of each wall's mDBC ghost
+  // nodes reach across the plane.
+  std::vector<std::uint8_t> keep_walls(const Vec3* pos, const Vec3* ghost, const Vec3* ghost_alt,
+                                       Index n, bool by_ghost) const override;
   void build_wall_plan(const GlobalId*, const std::uint8_t*, Index) override {}
   void wall_slots(std::vector<Index>& roots, std::vector<Index>& leaves) const override {
     roots.clear();

@@ -819,7 +819,7 @@ class Solver final : public SolverBase {
   ParticleSet<Host> select_walls(ParticleSet<Host>& all) const {
     const Index n = all.n_wall;
     const std::vector<std::uint8_t> keep =
-        ex_->keep_walls(all.pos.data(), all.ghost.data(), n, p_.mdbc);
+        ex_->keep_walls(all.pos.data(), all.ghost.data(), all.ghost_alt.data(), n, p_.mdbc);
     std::vector<Index> slots;
     for (Index i = 0; i < n; ++i)
       if (keep[std::size_t(i)]) slots.push_back(i);

@@ -73,7 +73,8 @@ WallScene wall_scene(bool mdbc) {
 
 // The brute-force answer: the ids of the walls this rank keeps, out of the whole set.
 std::vector<GlobalId> kept_ids(const MpiExchange& ex, const ParticleSet<Host>& walls, bool mdbc) {
-  const auto keep = ex.keep_walls(walls.pos.data(), walls.ghost.data(), walls.n_wall, mdbc);
+  const auto keep = ex.keep_walls(walls.pos.data(), walls.ghost.data(), walls.ghost_alt.data(),
+                                  walls.n_wall, mdbc);
   std::vector<GlobalId> ids;
   for (Index i = 0; i < walls.n_wall; ++i)
     if (keep[std::size_t(i)]) ids.push_back(walls.id[std::size_t(i)]);

@@ -77,7 +77,7 @@ TEST(MirrorExchange, HaloIsTheReflectedFluidNearThePlane) {
   ps.pos[4] = Vec3(0, -0.01, -0.05);
   ps.ghost[4] = Vec3(0, -0.01, 0.05);
   ps.body[4] = 0;
-  EXPECT_EQ(ex.keep_walls(ps.pos.data() + 4, ps.ghost.data() + 4, 1, true),
+  EXPECT_EQ(ex.keep_walls(ps.pos.data() + 4, ps.ghost.data() + 4, ps.ghost.data() + 4, 1, true),
             std::vector<std::uint8_t>{1});
   ex.build_halo(ps);
   ASSERT_EQ(ps.n_halo, 3);  // 0.35 is beyond the width 0.3
@@ -113,13 +113,21 @@ TEST(MirrorExchange, HaloIsTheReflectedFluidNearThePlane) {
   EXPECT_DOUBLE_EQ(rh[2], 4);
 }
 
-// A wall's ghost node across the plane widens the halo to 2h (the support) past it.
+// A wall's ghost node across the plane widens the halo to 2h (the support) past it: the first
+// ghost node, and the second (a thin solid's other face), whose gather needs the mirror fluid
+// around it as much. Without mDBC (by_ghost false) only the wall itself counts.
 TEST(MirrorExchange, HaloReachesPastTheDeepestGhostNode) {
   MirrorExchange ex(plane_y(0, 1), 0.3, 0.2);
   EXPECT_DOUBLE_EQ(ex.width(), Real(0.3));  // the width as given
   const Vec3 pos(0, -0.05, 0), ghost(0, -0.15, 0);
-  ex.keep_walls(&pos, &ghost, 1, true);
+  ex.keep_walls(&pos, &ghost, &ghost, 1, true);
   EXPECT_REAL_EQ(ex.width(), 0.35);  // 0.15 + 0.2, one rounding
+  const Vec3 alt(0, -0.17, 0);
+  ex.keep_walls(&pos, &ghost, &alt, 1, true);
+  EXPECT_REAL_EQ(ex.width(), 0.37);  // the second ghost node is the deeper
+  const Vec3 far(0, -0.25, 0);
+  ex.keep_walls(&far, &ghost, &alt, 1, false);
+  EXPECT_REAL_EQ(ex.width(), 0.45);  // DBC: the wall at 0.25
 }
 
 // The build models one side: half the fluid of the symmetric pillar scene, the walls beyond 2h
