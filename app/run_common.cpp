@@ -61,6 +61,9 @@ void write_summary(const std::string& path, const Scene& scene, const RunResult&
     << ", \"grain_boundary\": " << r.grain << "},\n"
     << "  \"removed\": {\"count\": " << r.removed << ", \"mass\": " << r.removed_mass << "},\n"
     << "  \"particle_steps_per_second\": " << r.particle_steps_per_second << ",\n"
+    << "  \"guards\": {\"mach_max\": " << scene.guards.mach_max
+    << ", \"rho_min_ratio\": " << scene.guards.rho_min_ratio
+    << ", \"rho_max_ratio\": " << scene.guards.rho_max_ratio << "},\n"
     << "  \"checkpoints\": " << r.checkpoints << ",\n"
     << "  \"last_checkpoint\": \"" << r.last_checkpoint << "\",\n"
     << "  \"status\": \""

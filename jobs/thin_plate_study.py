@@ -61,14 +61,21 @@ def run_case(sphdem, scene, out, dp, lim, until, cfl=None, mach_max=None):
     return d
 
 
-def mach_max_of(d):
-    """guards.mach_max as the run used it (its scene.yaml, overrides applied)."""
+def mach_max_of(d, js):
+    """guards.mach_max as the run used it: summary.json's "guards" (default included). Runs of
+    sphdem before that field have only their scene.yaml (overrides applied), read by hand since
+    this Python may lack a yaml module; a scene that left the key to its default gives NaN, and
+    says so."""
+    if "guards" in js:
+        return float(js["guards"]["mach_max"])
     with open(os.path.join(d, "scene.yaml")) as f:
         for line in f:
             if line.strip().startswith("mach_max:"):
                 return float(line.split(":", 1)[1].split("#")[0])
             if "mach_max:" in line:  # flow style: guards: {mach_max: 0.2, ...}
                 return float(line.split("mach_max:", 1)[1].split(",")[0].split("}")[0])
+    sys.stderr.write("%s: summary.json has no \"guards\" (an older sphdem) and scene.yaml does "
+                     "not set guards.mach_max: the table's mach_max is NaN\n" % d)
     return float("nan")
 
 
@@ -78,7 +85,7 @@ def summarize(d, dp, lim, until, cfl=None):
     r = {"dp_mm": dp * 1e3, "limiter": "on" if lim else "off",
          "cfl": "scene" if cfl is None else repr(cfl), "fluid": js["particles"]["fluid"],
          "wall_s": js["wall_seconds"], "steps": js["steps"], "status": js["status"],
-         "t_end": js["sim_time"], "mach_max": mach_max_of(d)}
+         "t_end": js["sim_time"], "mach_max": mach_max_of(d, js)}
     h, rows = flume_study.read_csv(os.path.join(d, "plate.csv"))
     rows = [x for x in rows if x[0] <= until + 1e-9]
     if not rows:

@@ -72,12 +72,20 @@ std::string near_solid_text(const Scene& scene, Real time, const Vec3& x, Real r
   if (best_phi >= 0 && best_phi < Real(0.5) * dp)
     d << " (nearer than dp/2 = " << Real(0.5) * dp * 1000
       << " mm, where the first fluid layer sits)";
+  // A thin solid leaks only the fluid pressed into it: inside it or within one dp of its
+  // surface (the first layer sits at dp/2). Farther out, its thickness is reported without
+  // blaming it.
   for (const ThinSolid& t : thin)
-    if (t.name == best->name)
+    if (t.name == best->name) {
       d << ", which is " << t.thickness * 1000 << " mm thick, less than the boundary depth "
-        << boundary_depth * 1000
-        << " mm: its truncated boundary lets fluid be pressed into it and shot out; thicken the "
-           "solid or refine dp (a higher c0 only stiffens the fluid)";
+        << boundary_depth * 1000 << " mm";
+      if (best_phi < dp)
+        d << ": its truncated boundary lets fluid be pressed into it and shot out; thicken the "
+             "solid or refine dp (a higher c0 only stiffens the fluid)";
+      else
+        d << " (the particle is " << best_phi / dp
+          << " dp from it, farther than a particle pressed into it)";
+    }
   return d.str();
 }
 

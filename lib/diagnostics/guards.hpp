@@ -58,7 +58,8 @@ struct GuardSpan {
 // Where x stands against the nearest solid whose surface lies within `reach` (removed solids
 // skipped): "; it is 5.5 mm inside solid 'barrier_2'" or "...from the surface of solid ..."
 // (saying so when that is nearer than dp/2, where the first fluid layer sits), and, when that
-// solid is one of `thin` (thinner than the boundary depth), that it can leak.
+// solid is one of `thin` (thinner than the boundary depth), its thickness and, for a particle
+// inside it or within dp of its surface, that it can leak.
 // Empty when no solid is that near. The Mach and density guards append it to the particle they
 // name: a particle squeezed into a thin wall is the usual cause of a lone fast or dense particle.
 std::string near_solid_text(const Scene& scene, Real time, const Vec3& x, Real reach,

@@ -9,6 +9,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -42,16 +43,10 @@ std::vector<std::string> coarse_dam_break(std::vector<std::string> extra) {
   return ov;
 }
 
-std::string read_file(const std::string& path) {
-  std::ifstream f(path);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
-
 struct GuardRun {
   RunResult r;
   std::string out;
+  Scene scene;
 };
 
 GuardRun run_case(const std::string& scene_path, const std::vector<std::string>& overrides,
@@ -64,7 +59,8 @@ GuardRun run_case(const std::string& scene_path, const std::vector<std::string>&
   opt.backend = Backend::kHost;
   opt.quiet = true;
   opt.max_steps = max_steps;
-  g.r = run_scene(load_scene(scene_path, overrides), opt);
+  g.scene = load_scene(scene_path, overrides);
+  g.r = run_scene(g.scene, opt);
   return g;
 }
 
@@ -119,11 +115,17 @@ void expect_guard(const GuardRun& g, const std::string& cause, std::int64_t max_
       << r.failure;
   EXPECT_GT(r.steps, 0);
   EXPECT_LE(r.steps, max_steps);
-  const std::string summary = read_file(g.out + "/summary.json");
+  const std::string summary = runfiles::slurp(g.out + "/summary.json");
   EXPECT_NE(summary.find("\"status\": \"unstable\""), std::string::npos) << summary;
   EXPECT_NE(summary.find("\"failure\": \"unstable: " + cause), std::string::npos) << summary;
   EXPECT_NE(summary.find("\"steps\": " + std::to_string(r.steps) + ","), std::string::npos)
       << summary;
+  // The guards the run was judged by, as the scene set them (a study's table reads them here).
+  std::ostringstream gj;
+  gj << std::setprecision(10) << "\"guards\": {\"mach_max\": " << g.scene.guards.mach_max
+     << ", \"rho_min_ratio\": " << g.scene.guards.rho_min_ratio
+     << ", \"rho_max_ratio\": " << g.scene.guards.rho_max_ratio << "}";
+  EXPECT_NE(summary.find(gj.str()), std::string::npos) << summary;
   const std::string dump = g.out + "/emergency_step" + std::to_string(r.steps) + ".csv";
   ASSERT_TRUE(fs::exists(dump)) << dump;
   std::ifstream f(dump);
@@ -203,7 +205,7 @@ void expect_named(const GuardRun& g, Named what) {
 
 void expect_completed(const GuardRun& g) {
   EXPECT_FALSE(g.r.unstable) << g.r.failure;
-  EXPECT_NE(read_file(g.out + "/summary.json").find("\"status\": \"completed\""),
+  EXPECT_NE(runfiles::slurp(g.out + "/summary.json").find("\"status\": \"completed\""),
             std::string::npos);
   expect_guard_rows(g);
 }
