@@ -250,8 +250,14 @@ std::unique_ptr<SolverBase> make_solver(
   } else {
     log << "backend: host, " << host_thread_count() << " OpenMP threads\n";
   }
-  if (device) return make_device_solver(scene, std::move(ps), c0, mirror);
-  return make_host_solver(scene, std::move(ps), c0, mirror);
+  std::unique_ptr<SolverBase> solver = device ? make_device_solver(scene, std::move(ps), c0, mirror)
+                                              : make_host_solver(scene, std::move(ps), c0, mirror);
+  // The mirror halo's width is known once the solver has kept its walls (their ghost nodes
+  // across the plane can widen it).
+  if (mirror)
+    log << "symmetry: mirror halo " << static_cast<const MirrorExchange&>(*mirror).width()
+        << " m of fluid on the modelled side\n";
+  return solver;
 }
 
 namespace {
