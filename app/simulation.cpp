@@ -156,10 +156,7 @@ std::unique_ptr<SolverBase> make_solver(
       log << "warning: symmetry: " << w
           << " has no mirror image among the barrier walls; impact_force.csv gives it its "
              "modelled part plus that part's mirror image\n";
-    if (rep.symmetry_unmatched > 0)
-      log << "warning: symmetry: " << rep.symmetry_unmatched
-          << " wall particles within 2h of the plane have no mirror image among the walls (the "
-             "walls are not symmetric about it): the run is not the full scene's half\n";
+    describe_symmetry_mismatch(rep, log);
   }
   if (nranks > 1) {
     const StepParams p = make_step_params(scene, c0);
@@ -1117,9 +1114,7 @@ void check_scene(const Scene& scene, std::ostream& os) {
        << "xyz"[sym.axis] << (sym.keep > 0 ? " > " : " < ") << sym.at << " (the full scene has "
        << rep.fluid + rep.symmetry_fluid_dropped << " fluid particles; "
        << rep.symmetry_walls_dropped << " wall particles across the plane not built)\n";
-    if (rep.symmetry_unmatched > 0)
-      os << "warning: symmetry: " << rep.symmetry_unmatched
-         << " wall particles within 2h of the plane have no mirror image among the walls\n";
+    describe_symmetry_mismatch(rep, os);
     std::vector<std::string> unpaired;
     mirror_solids(scene, &unpaired);
     for (const std::string& w : unpaired)

@@ -99,6 +99,17 @@ Real far_face_distance(const geom::Sdf& sdf, const Vec3& x, const Vec3& n, Real 
   return limit;
 }
 
+// A lattice point (i + 1/2) dp by its indices, for sets of points.
+struct LatticeKey {
+  long long i, j, k;
+  bool operator==(const LatticeKey& o) const { return i == o.i && j == o.j && k == o.k; }
+};
+struct LatticeKeyHash {
+  std::size_t operator()(const LatticeKey& a) const {
+    return std::hash<long long>()(a.i * 73856093LL ^ a.j * 19349663LL ^ a.k * 83492791LL);
+  }
+};
+
 template <class F>
 void for_lattice(const Scene& scene, Vec3 lo, Vec3 hi, F&& f) {
   const Real dp = scene.sph.dp;
@@ -186,6 +197,12 @@ ParticleSet<Host> build_particles(const Scene& scene, BuildReport* report,
   std::vector<Index> bnumber;  // each stored wall's number among all the scene's walls
   std::vector<Index> by_solid(scene.solids.size(), 0);
   Index walls_made = 0;
+  // With a symmetry plane: every wall particle of the full scene, by lattice point.
+  std::unordered_set<LatticeKey, LatticeKeyHash> full_walls;
+  const auto lattice_key = [&](const Vec3& x) {
+    auto c = [&](Real v) { return static_cast<long long>(std::llround(v / dp - Real(0.5))); };
+    return LatticeKey{c(x.x), c(x.y), c(x.z)};
+  };
   // The domain bounds the fluid; walls may lie up to `depth` outside it (non-periodic axes).
   Vec3 lo = scene.domain_lo, hi = scene.domain_hi;
   for (int k = 0; k < 3; ++k) {
@@ -250,9 +267,12 @@ ParticleSet<Host> build_particles(const Scene& scene, BuildReport* report,
     if (!searched && dry && depth_x < dp)
       far = far_face_distance(sdf, x, n, 0, depth - depth_x, dp);
     // Beyond 2h on the mirrored side of a symmetry plane no fluid reaches a wall.
-    if (sym.enabled() && sym.side(x) <= Real(-2.02) * h) {
-      ++rep.symmetry_walls_dropped;
-      return;
+    if (sym.enabled()) {
+      full_walls.insert(lattice_key(x));
+      if (sym.side(x) <= Real(-2.02) * h) {
+        ++rep.symmetry_walls_dropped;
+        return;
+      }
     }
     // A first-layer particle of a face: is the solid behind it thinner than the boundary depth?
     // (Half a spacing of slack: a lattice cannot resolve a thickness finer than that.)
@@ -303,19 +323,16 @@ ParticleSet<Host> build_particles(const Scene& scene, BuildReport* report,
   rep.wall = walls_made;
   rep.wall_by_solid = by_solid;
   if (sym.enabled()) {
-    // The walls near the plane on the modelled side and their mirror images: a run that models
-    // half of a scene equals the full run only if they are there.
-    auto key = [&](const Vec3& x) {
-      const Real q = Real(1e-3) * dp;
-      auto c = [&](Real v) { return static_cast<long long>(std::llround(v / q)); };
-      return std::to_string(c(x.x)) + "," + std::to_string(c(x.y)) + "," + std::to_string(c(x.z));
-    };
-    std::unordered_set<std::string> at;
-    for (const Vec3& x : bpos) at.insert(key(x));
+    // Every wall on the modelled side and its mirror image among the full scene's walls: a run
+    // that models half of a scene equals the full run only if the walls are symmetric, near the
+    // plane (where the mirror fluid meets them) and far from it (a barrier wall and its image).
     for (const Vec3& x : bpos) {
-      const Real d = sym.side(x);
-      if (d > 0 && d < Real(2) * h && !at.count(key(sym.reflect_point(x))))
-        ++rep.symmetry_unmatched;
+      if (!(sym.side(x) > 0) || full_walls.count(lattice_key(sym.reflect_point(x)))) continue;
+      Vec3& a = rep.symmetry_unmatched_lo;
+      Vec3& b = rep.symmetry_unmatched_hi;
+      if (rep.symmetry_unmatched++ == 0) a = b = x;
+      a = Vec3(std::min(a.x, x.x), std::min(a.y, x.y), std::min(a.z, x.z));
+      b = Vec3(std::max(b.x, x.x), std::max(b.y, x.y), std::max(b.z, x.z));
     }
   }
   for (std::size_t s = 0; s < scene.solids.size(); ++s)
@@ -340,6 +357,18 @@ ParticleSet<Host> build_particles(const Scene& scene, BuildReport* report,
   }
   if (report) *report = rep;
   return ps;
+}
+
+void describe_symmetry_mismatch(const BuildReport& r, std::ostream& os) {
+  if (r.symmetry_unmatched == 0) return;
+  const Vec3 &a = r.symmetry_unmatched_lo, &b = r.symmetry_unmatched_hi;
+  os << "warning: symmetry: " << r.symmetry_unmatched << " wall particles of the modelled side, "
+     << "between (" << a.x << ", " << a.y << ", " << a.z << ") and (" << b.x << ", " << b.y << ", "
+     << b.z
+     << "), have no mirror image among the full scene's walls: the walls are not symmetric "
+        "about the plane, and the run is not the full scene's half (turned walls, or a solid's "
+        "face on a lattice row, which round-off puts inside the solid at one face and outside "
+        "at its mirror image: change dp)\n";
 }
 
 void describe_thin_solids(const BuildReport& report, Real dp, std::ostream& os) {

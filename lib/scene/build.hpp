@@ -32,10 +32,18 @@ struct BuildReport {
   std::vector<ThinSolid> thin;       // in scene order
   std::vector<Index> wall_by_solid;  // boundary particles of each solid, in scene order
   // Symmetry plane (scene.symmetry): fluid and walls dropped on the mirrored side, and the wall
-  // particles within 2h of the plane on the modelled side without a mirror image among the walls
-  // (0 when the walls are symmetric about the plane).
+  // particles on the modelled side whose mirror image is not a wall particle of the full scene
+  // (0 when the full scene's walls are symmetric about the plane), with their bounding box.
+  // A solid's face that falls on a lattice row is one cause: round-off puts the row inside the
+  // solid at one face and outside at its mirror image.
   Index symmetry_fluid_dropped = 0, symmetry_walls_dropped = 0, symmetry_unmatched = 0;
+  Vec3 symmetry_unmatched_lo, symmetry_unmatched_hi;
 };
+
+// "warning: symmetry: N wall particles ..., between (..) and (..), have no mirror image ...: the
+// run is not the full scene's half\n", or nothing when the walls are symmetric (report of a
+// build with a symmetry plane).
+void describe_symmetry_mismatch(const BuildReport& report, std::ostream& os);
 
 // One line per thin solid of `report`, each starting with "warning: " and naming the solid, its
 // thickness, the boundary depth and the remedy; nothing when no solid is thin.

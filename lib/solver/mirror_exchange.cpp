@@ -14,7 +14,9 @@ MirrorExchange::MirrorExchange(const SymmetryPlane& plane, Real width, Real supp
 }
 
 Real MirrorExchange::width() const {
-  return std::max(width_, ghost_reach_ + support_);
+  // Past the deepest wall or ghost node: the support, plus half the skin. Those points stand
+  // still, and the halo is rebuilt before any fluid particle has moved skin/2 towards them.
+  return std::max(width_, ghost_reach_ + support_ + Real(0.5) * (width_ - support_));
 }
 
 std::vector<std::uint8_t> MirrorExchange::keep_walls(const Vec3* pos, const Vec3* ghost,

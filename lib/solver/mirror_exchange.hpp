@@ -5,9 +5,10 @@
 // acts as a free-slip wall without boundary particles. Every wall is kept and owned; no
 // migration, no wall plan, reductions are identities.
 //
-// The width covers the kernel support 2h plus the skin, and also reaches 2h past the deepest
-// mDBC ghost node of the kept walls on the mirrored side (a wall particle just across the plane
-// interpolates its state from mirror fluid around its ghost node).
+// The width covers the kernel support 2h plus the skin, and also reaches 2h plus half the skin
+// past the deepest kept wall particle and mDBC ghost node (both of a thin solid's) on the
+// mirrored side: a wall particle just across the plane interpolates its state from mirror fluid
+// around its ghost nodes, which stand still while the fluid moves up to skin/2 between rebuilds.
 #pragma once
 
 #include <cstring>
@@ -35,7 +36,8 @@ T mirror_field_value(const SymmetryPlane& plane, const char* name, const T& x) {
 
 class MirrorExchange final : public Exchange {
  public:
-  // width: the halo width on the fluid's side of the plane (2h + skin); support: 2h.
+  // width: the halo width on the fluid's side of the plane (2h + skin); support: 2h (so the
+  // skin is width - support).
   MirrorExchange(const SymmetryPlane& plane, Real width, Real support);
 
   int rank() const override { return 0; }

@@ -6,7 +6,9 @@
 
 #include <cmath>
 #include <functional>
+#include <sstream>
 #include <string>
+#include <vector>
 
 #include "core/error.hpp"
 #include "diagnostics/mirror.hpp"
@@ -113,21 +115,74 @@ TEST(MirrorExchange, HaloIsTheReflectedFluidNearThePlane) {
   EXPECT_DOUBLE_EQ(rh[2], 4);
 }
 
-// A wall's ghost node across the plane widens the halo to 2h (the support) past it: the first
-// ghost node, and the second (a thin solid's other face), whose gather needs the mirror fluid
-// around it as much. Without mDBC (by_ghost false) only the wall itself counts.
+// A wall's ghost node across the plane widens the halo to 2h (the support) plus half the skin
+// past it: the first ghost node, and the second (a thin solid's other face), whose gather needs
+// the mirror fluid around it as much. Without mDBC (by_ghost false) only the wall itself counts.
 TEST(MirrorExchange, HaloReachesPastTheDeepestGhostNode) {
-  MirrorExchange ex(plane_y(0, 1), 0.3, 0.2);
-  EXPECT_DOUBLE_EQ(ex.width(), Real(0.3));  // the width as given
+  MirrorExchange ex(plane_y(0, 1), 0.3, 0.2);  // 2h = 0.2, skin 0.1
+  EXPECT_DOUBLE_EQ(ex.width(), Real(0.3));     // the width as given
+  const Vec3 near(0, -0.01, 0);
+  ex.keep_walls(&near, &near, &near, 1, true);
+  EXPECT_DOUBLE_EQ(ex.width(), Real(0.3));  // 0.01 + 0.2 + 0.05 is inside the width
   const Vec3 pos(0, -0.05, 0), ghost(0, -0.15, 0);
   ex.keep_walls(&pos, &ghost, &ghost, 1, true);
-  EXPECT_REAL_EQ(ex.width(), 0.35);  // 0.15 + 0.2, one rounding
+  EXPECT_REAL_EQ(ex.width(), 0.4);  // 0.15 + 0.2 + 0.05
   const Vec3 alt(0, -0.17, 0);
   ex.keep_walls(&pos, &ghost, &alt, 1, true);
-  EXPECT_REAL_EQ(ex.width(), 0.37);  // the second ghost node is the deeper
+  EXPECT_REAL_EQ(ex.width(), 0.42);  // the second ghost node is the deeper
   const Vec3 far(0, -0.25, 0);
   ex.keep_walls(&far, &ghost, &alt, 1, false);
-  EXPECT_REAL_EQ(ex.width(), 0.45);  // DBC: the wall at 0.25
+  EXPECT_REAL_EQ(ex.width(), 0.5);  // DBC: the wall at 0.25
+}
+
+// The full scene's walls must be symmetric everywhere, not only near the plane. The flume's P00
+// barrier is, at dp = 10 mm. At dp = 400/56 mm every wall's side faces fall on lattice rows and
+// round-off keeps the row at the +y face and drops it at the -y face: the full build is the
+// barrier shifted by dp/2, the half build the modelled side mirrored. The build says so, naming
+// the barrier row; near the plane (within 2h) every wall has its image, so a check there alone
+// found nothing.
+TEST(SymmetryBuild, FindsWallsWithoutAMirrorImageFarFromThePlane) {
+  const std::string flume = std::string(SPHDEM_SOURCE_DIR) + "/inputs/flume/flume.yaml";
+  const std::string plane = "symmetry={axis: y, at: 0.2}";
+  BuildReport coarse, fine;
+  build_particles(load_scene(flume, {plane, "sph.dp=0.01"}), &coarse);
+  EXPECT_EQ(coarse.symmetry_unmatched, 0);
+  const Scene s = load_scene(flume, {plane, "sph.dp=0.00714285714"});
+  const ParticleSet<Host> ps = build_particles(s, &fine);
+  ASSERT_GT(fine.symmetry_unmatched, 0);
+  // The barrier row: its 13 mm walls stand at x = 0.6 (two lattice columns), on the modelled
+  // side from the middle wall's +y face (y = 0.225) on.
+  EXPECT_NEAR(fine.symmetry_unmatched_lo.x, 0.6 - 0.5 * s.sph.dp, 1e-9);
+  EXPECT_NEAR(fine.symmetry_unmatched_hi.x, 0.6 + 0.5 * s.sph.dp, 1e-9);
+  EXPECT_NEAR(fine.symmetry_unmatched_lo.y, 0.225, 1e-9);
+  EXPECT_GT(fine.symmetry_unmatched_hi.y, 0.39);
+  // Brute force over the half build's walls near the barrier (every unmatched one is there, by
+  // the box above): those on the modelled side whose image is no wall of the full build.
+  const ParticleSet<Host> full = build_particles(load_scene(flume, {"sph.dp=0.00714285714"}));
+  const auto near_barrier = [](const Vec3& x) { return std::abs(x.x - 0.6) < 0.05; };
+  std::vector<Vec3> full_near;
+  for (Index j = full.wall_begin(); j < full.size(); ++j)
+    if (near_barrier(full.pos[j])) full_near.push_back(full.pos[j]);
+  Index brute = 0;
+  const Real q = Real(1e-3) * s.sph.dp;
+  for (Index i = ps.wall_begin(); i < ps.size(); ++i) {
+    if (!(ps.pos[i].y > 0.2) || !near_barrier(ps.pos[i])) continue;
+    const Vec3 m(ps.pos[i].x, Real(0.4) - ps.pos[i].y, ps.pos[i].z);
+    bool found = false;
+    for (std::size_t j = 0; j < full_near.size() && !found; ++j) found = norm(full_near[j] - m) < q;
+    if (!found) ++brute;
+  }
+  EXPECT_EQ(fine.symmetry_unmatched, brute);
+  std::ostringstream os;
+  describe_symmetry_mismatch(fine, os);
+  EXPECT_EQ(os.str().rfind("warning: symmetry: " + std::to_string(brute) +
+                               " wall particles of the modelled side, between (",
+                           0),
+            0u)
+      << os.str();
+  std::ostringstream none;
+  describe_symmetry_mismatch(coarse, none);
+  EXPECT_EQ(none.str(), "");
 }
 
 // The build models one side: half the fluid of the symmetric pillar scene, the walls beyond 2h
