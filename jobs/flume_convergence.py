@@ -20,7 +20,10 @@ window): the middle wall's and the total's peak of the 0.05 s running mean of th
 the channel, the largest run-up, the first contact (the total force first above a tenth of its
 peak), and the share of the debris upstream of the barrier at --until. The wall time to --until is the run's wall time
 scaled by until / its simulated time (the step is nearly constant in these runs: acoustic
-limit). The differences are taken against the finest run. Writes OUT.csv, OUT.md and, with
+limit). RUN_DIR:dp:SECONDS gives the wall time to --until instead (a run continued past it by
+a restart, whose summary holds the last segment's wall time only). --reuse TABLE:dp takes the
+row of dp from an earlier OUT.csv, for a run whose folder is gone (say so where the table is
+quoted). The differences are taken against the finest row. Writes OUT.csv, OUT.md and, with
 matplotlib, OUT.png (difference against wall time, log axes).
 """
 import argparse
@@ -43,13 +46,28 @@ def first_contact(run_dir, until, peak_total):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
-    ap.add_argument("runs", nargs="+", help="RUN_DIR:dp")
+    ap.add_argument("runs", nargs="*", help="RUN_DIR:dp or RUN_DIR:dp:wall_seconds_to_until")
+    ap.add_argument("--reuse", action="append", default=[], metavar="TABLE:dp",
+                    help="the row of dp from an earlier table written by this script")
     ap.add_argument("--until", type=float, required=True)
     ap.add_argument("--out", required=True, help="output path without extension")
     a = ap.parse_args()
     rows = []
+    for spec in a.reuse:
+        table, dp = spec.rsplit(":", 1)
+        h, data = flume_study.read_csv(table)
+        hit = [r for r in data if abs(r[h.index("dp")] - float(dp)) <= 1e-9 * float(dp)]
+        if len(hit) != 1:
+            raise SystemExit("--reuse %s: %d rows of %s have dp = %s" % (spec, len(hit), table, dp))
+        row = {k: hit[0][h.index(k)] for k in h if not k.startswith("diff_")}
+        row["fluid"], row["boundary"] = int(row["fluid"]), int(row["boundary"])
+        rows.append(row)
     for spec in a.runs:
-        run_dir, dp = spec.rsplit(":", 1)
+        parts = spec.split(":")
+        if len(parts) not in (2, 3):
+            raise SystemExit("%s: give RUN_DIR:dp or RUN_DIR:dp:wall_seconds" % spec)
+        run_dir, dp = parts[0], parts[1]
+        wall = float(parts[2]) if len(parts) == 3 else None
         with open(os.path.join(run_dir, "summary.json")) as f:
             js = json.load(f)
         if js["sim_time"] < a.until - 1e-6:
@@ -58,7 +76,7 @@ def main():
         rows.append({
             "run": run_dir, "dp": float(dp), "fluid": js["particles"]["fluid"],
             "boundary": js["particles"]["wall_boundary"] + js["particles"]["grain_boundary"],
-            "wall_s": js["wall_seconds"] * a.until / js["sim_time"],
+            "wall_s": wall if wall is not None else js["wall_seconds"] * a.until / js["sim_time"],
             "first_contact": first_contact(run_dir, a.until, s["peak_total_50ms"]),
             "peak_mid_50ms": s["peak_mid_50ms"], "t_peak_mid_50ms": s["t_peak_50ms"],
             "peak_total_50ms": s["peak_total_50ms"], "max_runup": s["max_runup"],
@@ -89,7 +107,7 @@ def main():
             ax.annotate("%.1f mm" % (dp * 1e3), (x, y), fontsize=7)
     ax.set_xlabel("wall time to t = %g s (s, 2-core VM)" % a.until)
     ax.set_ylabel("difference from dp = %.1f mm" % (ref["dp"] * 1e3))
-    ax.set_title("P00 flume, half scene: accuracy against cost")
+    ax.set_title("P00 flume: accuracy against cost")
     ax.legend()
     fig.tight_layout()
     fig.savefig(a.out + ".png", dpi=120)
