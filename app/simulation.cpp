@@ -119,7 +119,10 @@ std::unique_ptr<SolverBase> make_solver(
   ParticleSet<Host> ps = build_particles(
       scene, &rep,
       many ? WallFilter([](const Vec3&, const Vec3&) { return false; }) : WallFilter{});
-  if (world_rank() == 0) describe_thin_solids(rep, scene.sph.dp, log);
+  if (world_rank() == 0) {
+    describe_thin_solids(rep, scene.sph.dp, log);
+    describe_surface_ties(rep, scene.sph.dp, log);
+  }
   if (prepare) prepare(ps, rep);
   if (report) *report = rep;
   const Real c0 = resolve_sound_speed(scene, rep);
@@ -1093,6 +1096,7 @@ void check_scene(const Scene& scene, std::ostream& os) {
      << grains.str() << "particles: fluid " << rep.fluid << ", wall boundary " << rep.wall
      << ", grain boundary " << rep.grain << ", total " << ps.size() << "\n";
   describe_thin_solids(rep, scene.sph.dp, os);
+  describe_surface_ties(rep, scene.sph.dp, os);
   for (std::size_t s = 0; s < scene.solids.size(); ++s) {
     const Solid& so = scene.solids[s];
     if (so.removed_by(0)) {

@@ -210,9 +210,19 @@ ParticleSet<Host> build_particles(const Scene& scene, BuildReport* report,
     lo[k] -= depth;
     hi[k] += depth;
   }
+  // Lattice points this near a surface are on it. Which side they fall on is arbitrary: a dp
+  // given to 11 digits (0.00714285714 for 0.4 m / 56) puts row k about k x 3e-12 m off, and
+  // with an exact dp round-off decides.
+  const Real tie = Real(1e-6) * dp;
+  std::vector<Index> ties(scene.solids.size(), 0);
   for_lattice(scene, lo, hi, [&](const Vec3& x) {
     int which = -1;
-    if (!(solids_phi(scene, x, &which) < Real(0))) return;
+    const Real phi_x = solids_phi(scene, x, &which);
+    if (which >= 0 && std::fabs(phi_x) < tie) {
+      const Solid& s = scene.solids[std::size_t(which)];
+      if (s.in_boundary_region(x) && s.sdf->wet_phi(x) > -depth) ++ties[std::size_t(which)];
+    }
+    if (!(phi_x < Real(0))) return;
     // Depth and mirror from the wet surface (a tank's back layers mirror through its inner face).
     const Solid& solid = scene.solids[std::size_t(which)];
     if (!solid.in_boundary_region(x)) return;
@@ -335,8 +345,10 @@ ParticleSet<Host> build_particles(const Scene& scene, BuildReport* report,
       b = Vec3(std::max(b.x, x.x), std::max(b.y, x.y), std::max(b.z, x.z));
     }
   }
-  for (std::size_t s = 0; s < scene.solids.size(); ++s)
+  for (std::size_t s = 0; s < scene.solids.size(); ++s) {
     if (thin_count[s] > 0) rep.thin.push_back({scene.solids[s].name, thin_min[s], thin_count[s]});
+    if (ties[s] > 0) rep.ties.push_back({scene.solids[s].name, ties[s]});
+  }
 
   // Initial density: hydrostatic pressure from each block's surface, through the Tait EOS.
   const Real c0 = resolve_sound_speed(scene, rep);
@@ -367,8 +379,24 @@ void describe_symmetry_mismatch(const BuildReport& r, std::ostream& os) {
      << b.z
      << "), have no mirror image among the full scene's walls: the walls are not symmetric "
         "about the plane, and the run is not the full scene's half (turned walls, or a solid's "
-        "face on a lattice row, which round-off puts inside the solid at one face and outside "
-        "at its mirror image: change dp)\n";
+        "face on a lattice row, which the last digits of dp put inside the solid at one face "
+        "and outside at its mirror image: change dp)\n";
+}
+
+void describe_surface_ties(const BuildReport& report, Real dp, std::ostream& os) {
+  if (report.ties.empty()) return;
+  Index points = 0;
+  for (const SurfaceTie& t : report.ties) points += t.points;
+  const std::size_t n = report.ties.size();
+  os << "warning: " << points << " lattice points lie on the surface of solid"
+     << (n > 1 ? "s " : " ");
+  for (std::size_t k = 0; k < n; ++k)
+    os << (k > 0 ? (k + 1 == n ? " and '" : ", '") : "'") << report.ties[k].name << "'";
+  os << " (a face on a row of the lattice at dp = " << dp * 1000
+     << " mm): the last digits of dp and of the solid's coordinates decide whether each is a "
+        "boundary particle, so the solid's extent "
+        "on the lattice is dp/2 off at some faces and a symmetric scene may be built "
+        "asymmetric; move the solid by dp/2 or change dp\n";
 }
 
 void describe_thin_solids(const BuildReport& report, Real dp, std::ostream& os) {

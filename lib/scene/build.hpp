@@ -21,6 +21,14 @@ struct ThinSolid {
   Index particles = 0;  // boundary particles in its first layer where it is that thin
 };
 
+// A solid with lattice points on its surface (within 1e-6 dp), where the boundary depth would
+// make them wall particles: whether each one is depends on the last digits of dp and of the
+// solid's coordinates, or on round-off.
+struct SurfaceTie {
+  std::string name;
+  Index points = 0;
+};
+
 struct BuildReport {
   Index fluid = 0, wall = 0, grain = 0;
   Real fluid_height = 0;  // largest fluid depth along gravity, for c0
@@ -30,12 +38,13 @@ struct BuildReport {
   // farther, so that the rank owning a particle's ghost node holds the fluid around both.
   Real ghost_spread = 0;
   std::vector<ThinSolid> thin;       // in scene order
+  std::vector<SurfaceTie> ties;      // in scene order
   std::vector<Index> wall_by_solid;  // boundary particles of each solid, in scene order
   // Symmetry plane (scene.symmetry): fluid and walls dropped on the mirrored side, and the wall
   // particles on the modelled side whose mirror image is not a wall particle of the full scene
   // (0 when the full scene's walls are symmetric about the plane), with their bounding box.
-  // A solid's face that falls on a lattice row is one cause: round-off puts the row inside the
-  // solid at one face and outside at its mirror image.
+  // A solid's face that falls on a lattice row is one cause: the last digits of dp put the row
+  // inside the solid at one face and outside at its mirror image (BuildReport::ties).
   Index symmetry_fluid_dropped = 0, symmetry_walls_dropped = 0, symmetry_unmatched = 0;
   Vec3 symmetry_unmatched_lo, symmetry_unmatched_hi;
 };
@@ -48,6 +57,10 @@ void describe_symmetry_mismatch(const BuildReport& report, std::ostream& os);
 // One line per thin solid of `report`, each starting with "warning: " and naming the solid, its
 // thickness, the boundary depth and the remedy; nothing when no solid is thin.
 void describe_thin_solids(const BuildReport& report, Real dp, std::ostream& os);
+
+// One warning line naming the solids of `report.ties` and how many lattice points lie on their
+// surfaces, with the remedy; nothing when there are none.
+void describe_surface_ties(const BuildReport& report, Real dp, std::ostream& os);
 
 // Which fixed-wall particles a build stores (many ranks: those near this rank's box, by position
 // and mDBC ghost node). Every wall particle is still generated, numbered and counted in the

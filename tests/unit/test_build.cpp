@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <map>
+#include <sstream>
 #include <string>
 
 #include "io/scene_yaml.hpp"
@@ -49,6 +50,30 @@ TEST(BuildParticles, WallFilterStoresTheKeptWallsWithTheFullBuildsIds) {
   }
   // The fluid is the same, id for id.
   for (Index i = 0; i < cut.n_fluid; ++i) EXPECT_EQ(cut.id[i], full.id[i]);
+}
+
+// Lattice points on a solid's surface: at dp = 0.4 m / 56 the flume's barrier walls are 7 dp wide
+// on an 8 dp pitch, so both side faces of every wall lie on lattice rows. Each face holds 2
+// columns across the 13 mm thickness (x = 0.596 and 0.604 m) by 13 rows up the 90 mm height (the
+// points below the floor belong to the channel, the nearer surface there): 52 per wall. At
+// 5 mm no barrier face is on a row. The build names them and `describe_surface_ties` warns.
+TEST(BuildParticles, CountsLatticePointsOnASolidsSurface) {
+  const std::string flume = std::string(SPHDEM_SOURCE_DIR) + "/inputs/flume/flume.yaml";
+  BuildReport fine, five;
+  build_particles(load_scene(flume, {"sph.dp=0.00714285714"}), &fine);
+  std::map<std::string, Index> ties;
+  for (const SurfaceTie& t : fine.ties) ties[t.name] = t.points;
+  for (int k = 1; k <= 7; ++k)
+    EXPECT_EQ(ties["barrier_" + std::to_string(k)], 52) << "barrier_" << k;
+  std::ostringstream os;
+  describe_surface_ties(fine, Real(0.00714285714), os);
+  EXPECT_EQ(os.str().rfind("warning: ", 0), 0u) << os.str();
+  EXPECT_NE(os.str().find("'barrier_1', 'barrier_2'"), std::string::npos) << os.str();
+  EXPECT_NE(os.str().find("move the solid by dp/2 or change dp"), std::string::npos) << os.str();
+
+  build_particles(load_scene(flume, {"sph.dp=0.005"}), &five);
+  for (const SurfaceTie& t : five.ties)
+    EXPECT_EQ(t.name.rfind("barrier_", 0), std::string::npos) << t.name << ": " << t.points;
 }
 
 }  // namespace

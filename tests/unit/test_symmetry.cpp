@@ -137,7 +137,8 @@ TEST(MirrorExchange, HaloReachesPastTheDeepestGhostNode) {
 
 // The full scene's walls must be symmetric everywhere, not only near the plane. The flume's P00
 // barrier is, at dp = 10 mm. At dp = 400/56 mm every wall's side faces fall on lattice rows and
-// round-off keeps the row at the +y face and drops it at the -y face: the full build is the
+// dp given as 0.00714285714 (3e-12 m short) puts each row just below its face, so the row at the
+// +y face is kept and the one at the -y face dropped: the full build is the
 // barrier shifted by dp/2, the half build the modelled side mirrored. The build says so, naming
 // the barrier row; near the plane (within 2h) every wall has its image, so a check there alone
 // found nothing.
