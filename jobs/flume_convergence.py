@@ -10,7 +10,8 @@ folder, for example the P00 half scene:
   build/sphdem run inputs/flume/flume.yaml --out runs/f10 --set sph.dp=0.01 \\
       --set "symmetry={axis: y, at: 0.2}" --set time.end=1.5 --set frames.every=0
 
-then
+(the half scene only where `sphdem check` does not warn that the full scene's walls lack mirror
+images: at dp = 0.00714285714 they do, and runs/f7 must be the full scene), then
 
   /usr/bin/python3 jobs/flume_convergence.py --until 1.0 --out docs/figures/flume_convergence \\
       runs/f10:0.01 runs/f7:0.00714285714 runs/f5:0.005
