@@ -10,6 +10,7 @@
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <optional>
 #include <sstream>
 
 #include <mpi.h>
@@ -391,12 +392,16 @@ class DiagnosticWriter {
   void add_step(const StepStats& st) { span_.add(st); }
   // The row for the steps since the previous one (none before the first step), at time t; the
   // run's last row when a guard fires, whose span ends with the step the guard judged.
+  // Every rank resets its span here, so the spans agree across ranks (a checkpoint holds it).
   void write_guards(Real t, Real c0) {
-    if (!guards_on_ || span_.steps == 0) return;
-    guards_.row({t, double(span_.steps), span_.max_speed, span_.max_speed / c0, span_.rho_min,
-                 span_.rho_max, span_.dt_min});
+    if (span_.steps == 0) return;
+    if (guards_on_)
+      guards_.row({t, double(span_.steps), span_.max_speed, span_.max_speed / c0, span_.rho_min,
+                   span_.rho_max, span_.dt_min});
     span_ = GuardSpan{};
   }
+  const GuardSpan& guard_span() const { return span_; }
+  void set_guard_span(const GuardSpan& s) { span_ = s; }
 
   void write(Real t, const ParticleSet<Host>& ps, const StepParams& p) {
     write_guards(t, p.eos.c0);
@@ -640,6 +645,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
 
   Real next_diag = 0;
   std::vector<std::int64_t> profile_state;
+  std::optional<GuardSpan> guard_span;  // the checkpoint's, when it has one
   if (restarting) {
     CheckpointData cp = read_checkpoint(restart_file);
     // A gate removed before the checkpoint left it without the gate's boundary particles.
@@ -666,6 +672,15 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
     if (ex) distribute_after_read(*ex, cp.particles, solver->params().mdbc);
     next_diag = cp.next_output_time;
     profile_state = cp.profile_next;
+    if (cp.guard_steps >= 0) {
+      GuardSpan g;
+      g.steps = cp.guard_steps;
+      g.max_speed = Real(cp.guard_max_speed);
+      g.rho_min = Real(cp.guard_rho_min);
+      g.rho_max = Real(cp.guard_rho_max);
+      g.dt_min = Real(cp.guard_dt_min);
+      guard_span = g;
+    }
     solver->restore(std::move(cp.particles), cp.counters);
     log << "restarted from " << restart_file << " at t = " << solver->time() << " s, step "
         << solver->step_count() << "\n";
@@ -681,6 +696,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
   const double keep_before = restarting ? double(solver->time()) : INFINITY;
   DiagnosticWriter diag(scene, opt.out_dir, restarting, root, keep_before);
   diag.set_profile_state(profile_state);
+  if (guard_span) diag.set_guard_span(*guard_span);
   std::unique_ptr<std::ofstream> bodies_csv;
   if (coupling && root) {  // the DEM is replicated on every rank: rank 0 writes it
     // A restart drops the rows written after its checkpoint (a killed run's last rows) first.
@@ -770,6 +786,12 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
     cp.counters = solver->counters();
     cp.next_output_time = next_diag;
     cp.profile_next = diag.profile_state();
+    const GuardSpan& gs = diag.guard_span();
+    cp.guard_steps = gs.steps;
+    cp.guard_max_speed = double(gs.max_speed);
+    cp.guard_rho_min = double(gs.rho_min);
+    cp.guard_rho_max = double(gs.rho_max);
+    cp.guard_dt_min = double(gs.dt_min);
     if (ex) {  // rank 0 evaluates the profiles; the file's attributes must agree on all ranks
       MPI_Bcast(cp.profile_next.data(), int(cp.profile_next.size()), MPI_INT64_T, 0, comm);
     }

@@ -285,6 +285,13 @@ std::uint64_t write_checkpoint(const std::string& path, const CheckpointData& d)
   h5::write_attr<std::int64_t>(f, "n_fluid", H5T_NATIVE_INT64, total[0]);
   h5::write_attr<std::int64_t>(f, "n_boundary", H5T_NATIVE_INT64, total[1]);
   h5::write_attr<std::uint64_t>(f, "checksum", H5T_NATIVE_UINT64, sum);
+  if (d.guard_steps >= 0) {
+    h5::write_attr<std::int64_t>(f, "guard_steps", H5T_NATIVE_INT64, d.guard_steps);
+    h5::write_attr<double>(f, "guard_max_speed", H5T_NATIVE_DOUBLE, d.guard_max_speed);
+    h5::write_attr<double>(f, "guard_rho_min", H5T_NATIVE_DOUBLE, d.guard_rho_min);
+    h5::write_attr<double>(f, "guard_rho_max", H5T_NATIVE_DOUBLE, d.guard_rho_max);
+    h5::write_attr<double>(f, "guard_dt_min", H5T_NATIVE_DOUBLE, d.guard_dt_min);
+  }
   {
     const hsize_t n = d.profile_next.size();
     hid_t sp = H5Screate_simple(1, &n, nullptr);
@@ -384,6 +391,14 @@ CheckpointData read_checkpoint(const std::string& path) {
     d.total_boundary = h5::read_attr<std::int64_t>(f, "n_boundary", H5T_NATIVE_INT64, label(path));
     const auto checksum =
         h5::read_attr<std::uint64_t>(f, "checksum", H5T_NATIVE_UINT64, label(path));
+    if (H5Aexists(f, "guard_steps") > 0) {
+      d.guard_steps = h5::read_attr<std::int64_t>(f, "guard_steps", H5T_NATIVE_INT64, label(path));
+      d.guard_max_speed =
+          h5::read_attr<double>(f, "guard_max_speed", H5T_NATIVE_DOUBLE, label(path));
+      d.guard_rho_min = h5::read_attr<double>(f, "guard_rho_min", H5T_NATIVE_DOUBLE, label(path));
+      d.guard_rho_max = h5::read_attr<double>(f, "guard_rho_max", H5T_NATIVE_DOUBLE, label(path));
+      d.guard_dt_min = h5::read_attr<double>(f, "guard_dt_min", H5T_NATIVE_DOUBLE, label(path));
+    }
     for (const char* name : {"profile_next", "scene_yaml"}) {
       if (H5Lexists(f, name, H5P_DEFAULT) <= 0)
         fail(path, std::string("'") + name + "' is missing");

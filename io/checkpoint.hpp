@@ -29,6 +29,11 @@ struct CheckpointData {
   SolverCounters counters;
   Real next_output_time = 0;  // diagnostics schedule
   std::vector<std::int64_t> profile_next;
+  // guards.csv's open span (diagnostics/guards.hpp GuardSpan): the steps since its last row and
+  // their extremes, so a resumed run's rows equal the straight run's. guard_steps < 0: not in
+  // the file (a checkpoint of an older sphdem), and the resumed run starts a fresh span.
+  std::int64_t guard_steps = -1;
+  double guard_max_speed = 0, guard_rho_min = 0, guard_rho_max = 0, guard_dt_min = 0;
   std::string scene_yaml;
   int dim = 0;
   Real dp = 0;

@@ -1,6 +1,8 @@
 // Checkpoint/restart: bit-identical continuation, refusal of bad checkpoints, crash safety
 // (kill -9 during writes), and SIGTERM from a scheduler.
 #include <gtest/gtest.h>
+
+#include <cmath>
 #include <hdf5.h>
 
 #include <csignal>
@@ -71,8 +73,9 @@ TEST(Restart, ContinuesBitIdentically) {
   int headers = 0;
   while (std::getline(f, line)) headers += line.rfind("t,", 0) == 0;
   EXPECT_EQ(headers, 1);
-  // guards.csv: the resumed rows span the 200 steps run, and from the second on (the first spans
-  // only the steps since the restart) they are the straight run's rows, digit for digit.
+  // guards.csv: the checkpoint holds the open span (the steps since the last row), so every
+  // resumed row is the straight run's, digit for digit, the first one included (before, it
+  // spanned only the steps since the restart).
   auto lines = [](const std::string& path) {
     std::ifstream in(path);
     std::vector<std::string> v;
@@ -82,13 +85,15 @@ TEST(Restart, ContinuesBitIdentically) {
   const auto gs = lines("restart_straight/guards.csv"), gr = lines("restart_resumed/guards.csv");
   ASSERT_GE(gr.size(), 3u);
   EXPECT_EQ(gr[0], gs[0]);
-  double steps = 0;
-  for (std::size_t i = 1; i < gr.size(); ++i) steps += std::stod(gr[i].substr(gr[i].find(',') + 1));
-  EXPECT_EQ(steps, 200);
-  const std::size_t tail = gr.size() - 2;  // rows after the first resumed one
-  ASSERT_GT(gs.size(), tail);
+  const std::size_t tail = gr.size() - 1;  // every resumed row
+  ASSERT_GE(gs.size(), tail + 1);
   for (std::size_t k = 0; k < tail; ++k)
     EXPECT_EQ(gr[gr.size() - 1 - k], gs[gs.size() - 1 - k]) << "row " << k << " from the end";
+  // Here every row of the straight run comes after the checkpoint at step 100, so the resumed
+  // rows hold all 300 steps: the first one spans the 100 before the checkpoint too.
+  double steps = 0;
+  for (std::size_t i = 1; i < gr.size(); ++i) steps += std::stod(gr[i].substr(gr[i].find(',') + 1));
+  EXPECT_EQ(steps, 300);
 }
 
 TEST(Restart, RefusesBadCheckpoints) {
@@ -179,6 +184,20 @@ TEST(Restart, CheckpointWithoutBoundaryParticles) {
   EXPECT_EQ(back.particles.n_wall + back.particles.n_grain, 0);
   EXPECT_EQ(back.counters.step, 7);
   EXPECT_EQ(runfiles::state_by_id(back), runfiles::state_by_id(cp));
+  // No guards.csv span given: none written, as in an older sphdem's file, and none read back.
+  EXPECT_EQ(back.guard_steps, -1);
+  // A span (an empty one keeps its infinite bounds) reads back bit for bit.
+  cp.guard_steps = 0;
+  cp.guard_max_speed = 0;
+  cp.guard_rho_min = INFINITY;
+  cp.guard_rho_max = -INFINITY;
+  cp.guard_dt_min = 1.25e-5;
+  EXPECT_GT(write_checkpoint(path, cp), 0u);
+  const CheckpointData span = read_checkpoint(path);
+  EXPECT_EQ(span.guard_steps, 0);
+  EXPECT_EQ(span.guard_rho_min, INFINITY);
+  EXPECT_EQ(span.guard_rho_max, -INFINITY);
+  EXPECT_EQ(span.guard_dt_min, 1.25e-5);
 }
 
 TEST(Restart, KillDuringCheckpointWritesLeavesAUsableCheckpoint) {
