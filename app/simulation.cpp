@@ -1173,6 +1173,24 @@ void check_scene(const Scene& scene, std::ostream& os) {
        << " mm turned " << b.angle_deg << " deg, row at x = " << b.x
        << " m; effective opening ratio " << std::setprecision(4) << barrier_opening_ratio(b)
        << " (projected on the cross-channel axis); " << walls << " boundary particles\n";
+    if (scene.dim == 3) {
+      std::vector<bool> is_wall(scene.solids.size());
+      for (std::size_t s = 0; s < scene.solids.size(); ++s) is_wall[s] = wall_of_solid[s] >= 0;
+      const LatticeOpening lo = barrier_lattice_opening(b, ps, is_wall, scene.sph.dp);
+      // The column count is a fair opening only for walls square to the lattice: a turned wall's
+      // thin ends miss lattice points (its columns there are free of particles, not of the wall).
+      bool square = true;
+      for (const BarrierWall& w : barrier_walls(b)) square = square && w.angle == 0;
+      if (square)
+        os << "barrier on the lattice: " << lo.open << " of " << lo.columns
+           << " columns across the channel hold no barrier wall particle (opening "
+           << std::setprecision(4) << lo.ratio() << ")\n";
+      if (lo.closed_gaps > 0)
+        os << "warning: barrier: " << lo.closed_gaps << " of the " << lo.gaps
+           << " gaps between the walls (and beside the channel's sides) hold no lattice column "
+              "free of wall particles at dp = "
+           << scene.sph.dp * 1000 << " mm, so no fluid passes there: refine dp\n";
+    }
   }
 }
 

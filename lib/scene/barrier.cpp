@@ -58,8 +58,11 @@ std::vector<Solid> barrier_solids(const Barrier& b) {
   return out;
 }
 
-Real barrier_opening_ratio(const Barrier& b) {
-  // Each footprint's shadow on y: half-extent (w |cos a| + t |sin a|)/2 about the centre.
+namespace {
+
+// The gaps between the walls' shadows on y within [y_lo, y_hi], in y order: each footprint's
+// shadow has half-extent (w |cos a| + t |sin a|)/2 about its centre; overlapping shadows merge.
+std::vector<std::pair<Real, Real>> shadow_gaps(const Barrier& b) {
   std::vector<std::pair<Real, Real>> shadow;
   for (const BarrierWall& w : barrier_walls(b)) {
     const Real e = Real(0.5) * (b.width * std::abs(std::cos(w.angle)) +
@@ -67,13 +70,50 @@ Real barrier_opening_ratio(const Barrier& b) {
     shadow.emplace_back(std::max(b.y_lo, w.center.y - e), std::min(b.y_hi, w.center.y + e));
   }
   std::sort(shadow.begin(), shadow.end());
-  Real covered = 0, end = b.y_lo;
+  std::vector<std::pair<Real, Real>> gaps;
+  Real end = b.y_lo;
   for (const auto& [lo, hi] : shadow) {
-    const Real from = std::max(lo, end);
-    if (hi > from) covered += hi - from;
+    if (lo > end) gaps.emplace_back(end, lo);
     end = std::max(end, hi);
   }
-  return Real(1) - covered / (b.y_hi - b.y_lo);
+  if (b.y_hi > end) gaps.emplace_back(end, b.y_hi);
+  return gaps;
+}
+
+}  // namespace
+
+Real barrier_opening_ratio(const Barrier& b) {
+  Real open = 0;
+  for (const auto& [lo, hi] : shadow_gaps(b)) open += hi - lo;
+  return open / (b.y_hi - b.y_lo);
+}
+
+LatticeOpening barrier_lattice_opening(const Barrier& b, const ParticleSet<Host>& ps,
+                                       const std::vector<bool>& is_wall, Real dp) {
+  // Columns j with (j + 1/2) dp inside (y_lo, y_hi).
+  const long j0 = long(std::ceil(b.y_lo / dp - Real(0.5) + Real(1e-9)));
+  const long j1 = long(std::floor(b.y_hi / dp - Real(0.5) - Real(1e-9)));
+  LatticeOpening o;
+  if (j1 < j0) return o;
+  std::vector<std::uint8_t> blocked(std::size_t(j1 - j0 + 1), 0);
+  for (Index i = ps.wall_begin(); i < ps.size(); ++i) {
+    const std::int32_t body = ps.body[i];
+    if (body < 0 || std::size_t(body) >= is_wall.size() || !is_wall[std::size_t(body)]) continue;
+    const long j = std::lround(ps.pos[i].y / dp - Real(0.5));
+    if (j >= j0 && j <= j1) blocked[std::size_t(j - j0)] = 1;
+  }
+  o.columns = Index(blocked.size());
+  for (const std::uint8_t c : blocked) o.open += c ? 0 : 1;
+  for (const auto& [lo, hi] : shadow_gaps(b)) {
+    ++o.gaps;
+    bool any = false;
+    for (long j = j0; j <= j1 && !any; ++j) {
+      const Real y = (Real(j) + Real(0.5)) * dp;
+      any = !blocked[std::size_t(j - j0)] && y >= lo - Real(1e-6) * dp && y <= hi + Real(1e-6) * dp;
+    }
+    if (!any) ++o.closed_gaps;
+  }
+  return o;
 }
 
 namespace {

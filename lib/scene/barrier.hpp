@@ -28,6 +28,19 @@ std::vector<Solid> barrier_solids(const Barrier& b);
 // walls are not counted twice), over the channel width.
 Real barrier_opening_ratio(const Barrier& b);
 
+// The opening as the particle lattice resolves it (3D): of the lattice columns (i + 1/2) dp
+// across the channel's width, those that hold no boundary particle of a barrier wall (over the
+// whole row and height), and of the gaps between the walls' shadows (barrier_opening_ratio's,
+// the channel's sides included) those that hold no such open column: fluid cannot pass there.
+// is_wall: per solid index (ParticleSet::body), whether it is a barrier wall.
+struct LatticeOpening {
+  Index columns = 0, open = 0;
+  int gaps = 0, closed_gaps = 0;
+  Real ratio() const { return columns > 0 ? Real(open) / Real(columns) : Real(0); }
+};
+LatticeOpening barrier_lattice_opening(const Barrier& b, const ParticleSet<Host>& ps,
+                                       const std::vector<bool>& is_wall, Real dp);
+
 // Run-up: the highest fluid elevation (z above the floor, the bed-normal height in a channel
 // along x) near the barrier, over fluid particles from runup_band upstream of the first wall to
 // the last wall's downstream face that have at least 6 fluid neighbours within 2h (a lone splash

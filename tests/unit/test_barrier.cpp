@@ -2,12 +2,15 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
+#include <vector>
 
 #include "core/error.hpp"
 #include "io/scene_yaml.hpp"
 #include "diagnostics/probes.hpp"
 #include "precision.hpp"
 #include "scene/barrier.hpp"
+#include "scene/build.hpp"
 #include "solver/fluid_params.hpp"
 
 namespace sphdem {
@@ -72,6 +75,45 @@ TEST(Barrier, OverlappingWallsAreCountedOnce) {
   b.walls = 1;
   b.width = 0.1;
   EXPECT_NEAR(barrier_opening_ratio(b), 0.75, 1e-12);
+}
+
+// The opening as the lattice resolves it, on the flume's P00 build. At dp = 5 mm no wall face is
+// on a lattice row, so a column is blocked exactly when its centre lies inside a wall's y-range:
+// counted here from the geometry alone, 10 columns per 50 mm wall, 10 of 80 open, and every gap
+// (6 slits of 7.1 mm, two 3.6 mm side gaps) holds at least one. At 10 mm the middle wall's faces
+// (0.175, 0.225 m) lie on rows and the build keeps both: 6 + 6 x 5 = 36 of 40 columns blocked, and
+// the gaps beside the middle wall and both side gaps hold no free column.
+TEST(Barrier, LatticeOpeningOfTheFlumeBuild) {
+  const std::string flume = std::string(SPHDEM_SOURCE_DIR) + "/inputs/flume/flume.yaml";
+  const auto opening = [&](const std::string& dp) {
+    const Scene s = load_scene(flume, {"sph.dp=" + dp});
+    const ParticleSet<Host> ps = build_particles(s);
+    std::vector<bool> is_wall(s.solids.size());
+    for (std::size_t k = 0; k < s.solids.size(); ++k)
+      is_wall[k] = s.solids[k].name.rfind("barrier_", 0) == 0;
+    return std::make_pair(s, barrier_lattice_opening(s.barrier, ps, is_wall, s.sph.dp));
+  };
+  const auto [s5, five] = opening("0.005");
+  Index blocked = 0, columns = 0;
+  for (Real y = 0.0025; y < 0.4; y += 0.005, ++columns)
+    for (const BarrierWall& w : barrier_walls(s5.barrier))
+      if (std::abs(y - w.center.y) < 0.5 * s5.barrier.width) {
+        ++blocked;
+        break;
+      }
+  EXPECT_EQ(columns, 80);
+  EXPECT_EQ(five.columns, columns);
+  EXPECT_EQ(five.open, columns - blocked);
+  EXPECT_EQ(five.open, 10);
+  EXPECT_NEAR(five.ratio(), 0.125, 1e-12);
+  EXPECT_EQ(five.gaps, 8);
+  EXPECT_EQ(five.closed_gaps, 0);
+
+  const auto [s10, ten] = opening("0.01");
+  EXPECT_EQ(ten.columns, 40);
+  EXPECT_EQ(ten.open, 4);
+  EXPECT_EQ(ten.gaps, 8);
+  EXPECT_EQ(ten.closed_gaps, 4);
 }
 
 TEST(Barrier, WallPlacement) {
