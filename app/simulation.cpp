@@ -746,7 +746,11 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
       return;
     }
     const ParticleSet<Host> all = gathered();
-    if (root) diag.write(solver->time(), all, p);
+    if (root)
+      diag.write(solver->time(), all, p);
+    else
+      diag.write_guards(solver->time(), p.eos.c0);  // no row here, but the span is reset with
+                                                    // rank 0's, so a checkpoint's attributes agree
   };
   // The particle the Mach or the density guard names: the fastest, densest or lightest fluid
   // particle over all ranks (every rank calls this together, since the step's reductions agree).
@@ -794,6 +798,13 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
     cp.guard_dt_min = double(gs.dt_min);
     if (ex) {  // rank 0 evaluates the profiles; the file's attributes must agree on all ranks
       MPI_Bcast(cp.profile_next.data(), int(cp.profile_next.size()), MPI_INT64_T, 0, comm);
+      // The guard span is each rank's own (reset at every diagnostics time on all ranks).
+      std::int64_t span[2] = {cp.guard_steps, -cp.guard_steps};
+      MPI_Allreduce(MPI_IN_PLACE, span, 2, MPI_INT64_T, MPI_MAX, comm);
+      if (span[0] != -span[1])
+        throw RuntimeFault("checkpoint: the guards.csv span holds " + std::to_string(-span[1]) +
+                           " to " + std::to_string(span[0]) +
+                           " steps across the ranks; they must agree");
     }
     cp.scene_yaml = scene.yaml_text;
     cp.dim = scene.dim;

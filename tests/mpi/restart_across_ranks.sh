@@ -35,7 +35,7 @@ if ! awk -F, -v t200="$t200" 'NR == FNR { a[$1] = $0; next } FNR > 1 && ($1 in a
   echo "FAIL: the fluid momentum in energy.csv differs between one rank and 2 ranks + restart on 3"
   exit 1
 fi
-for f in energy4.csv front.csv; do
+for f in energy4.csv front.csv guards.csv; do
   extra=$(diff "$work/one/$f" "$work/many/$f" | grep '^>' | cut -c3- || true)
   missing=$(diff "$work/one/$f" "$work/many/$f" | grep '^<' || true)
   if [ -n "$missing" ] || [ "$(printf '%s\n' "$extra" | grep -c .)" -gt 1 ] ||
